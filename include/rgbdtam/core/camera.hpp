@@ -1,0 +1,58 @@
+#pragma once
+// Pinhole camera with radial-tangential (Brown-Conrady, OpenCV order k1 k2 p1 p2 k3) distortion.
+// Frame convention: x right, y down, z forward (OpenCV). Undistorted images keep the same
+// intrinsics as the raw camera.
+
+#include <cstdint>
+
+#include "rgbdtam/core/image.hpp"
+
+namespace rgbdtam {
+
+struct PinholeIntrinsics {
+  double fx_px = 0.0;
+  double fy_px = 0.0;
+  double cx_px = 0.0;
+  double cy_px = 0.0;
+  int width_px = 0;
+  int height_px = 0;
+
+  // Intrinsics of the next-coarser level of a 2x2-averaging pyramid: pixel centres
+  // move by half a pixel, so c' = (c - 0.5) / 2.
+  PinholeIntrinsics half() const {
+    return {fx_px * 0.5, fy_px * 0.5, (cx_px - 0.5) * 0.5, (cy_px - 0.5) * 0.5, width_px / 2,
+            height_px / 2};
+  }
+};
+
+struct RadTanDistortion {
+  double k1 = 0.0, k2 = 0.0, p1 = 0.0, p2 = 0.0, k3 = 0.0;
+  bool is_zero() const { return k1 == 0.0 && k2 == 0.0 && p1 == 0.0 && p2 == 0.0 && k3 == 0.0; }
+  // Normalised undistorted -> normalised distorted coordinates.
+  void distort(double x, double y, double* xd, double* yd) const;
+  // Inverse of distort() by fixed-point iteration; exact to ~1e-10 for camera-sized fields.
+  void undistort(double xd, double yd, double* x, double* y) const;
+};
+
+// Lookup tables from undistorted to raw pixels, built once at init.
+class Undistorter {
+ public:
+  void init(const PinholeIntrinsics& k, const RadTanDistortion& d);
+  bool is_identity() const { return identity_; }
+  // Bilinear for intensities; pixels whose source lies outside the raw image become 0.
+  void undistort_gray(const uint8_t* raw, ImageF* out_unit) const;
+  // Nearest-neighbour for depth, so no depth is invented across discontinuities.
+  void undistort_depth(const uint16_t* raw, ImageU16* out) const;
+
+ private:
+  struct BilinearTap {
+    int32_t index;  // top-left source pixel, or -1 when outside
+    float ax, ay;
+  };
+  std::unique_ptr<BilinearTap[]> taps_;
+  std::unique_ptr<int32_t[]> nearest_;
+  int width_ = 0, height_ = 0;
+  bool identity_ = true;
+};
+
+}  // namespace rgbdtam

@@ -1,0 +1,51 @@
+#pragma once
+// The TUM RGB-D benchmark's metrics, reproduced exactly: associate.py (greedy one-to-one,
+// |dt| < 0.02 s), evaluate_ate.py (Horn alignment without scale, RMSE of positions) and
+// evaluate_rpe.py --fixed_delta --delta 1 --delta_unit s. Host-side: this allocates.
+
+#include <cstdint>
+#include <vector>
+
+#include "rgbdtam/core/se3.hpp"
+
+namespace rgbdtam {
+
+struct StampedPose {
+  double stamp_s;  // the benchmark works in float seconds, so do we
+  SE3 T_w_c;
+};
+
+// Pairs (index into first, index into second), sorted by the first's stamp.
+std::vector<std::pair<int, int>> associate(const std::vector<double>& first,
+                                           const std::vector<double>& second,
+                                           double offset_s = 0.0, double max_difference_s = 0.02);
+
+struct AteResult {
+  int compared = 0;
+  double rmse_m = 0, mean_m = 0, median_m = 0, std_m = 0, min_m = 0, max_m = 0;
+  SE3 T_gt_est;  // the alignment
+};
+// Returns false when fewer than 2 poses associate.
+bool evaluate_ate(const std::vector<StampedPose>& gt, const std::vector<StampedPose>& est,
+                  AteResult* out);
+
+struct RpeResult {
+  int compared = 0;
+  double trans_rmse_m = 0, trans_mean_m = 0, trans_median_m = 0;
+  double rot_rmse_deg = 0, rot_mean_deg = 0, rot_median_deg = 0;
+};
+// Per delta_s seconds (1.0 gives the benchmark's "per second" numbers).
+bool evaluate_rpe(const std::vector<StampedPose>& gt, const std::vector<StampedPose>& est,
+                  double delta_s, RpeResult* out);
+
+// Fraction of the sequence's frames (with ground truth within 0.02 s) that have an estimate.
+struct Coverage {
+  int frames = 0;     // frames of the sequence that have ground truth
+  int estimated = 0;  // of those, frames with an estimated pose
+  double fraction() const { return frames > 0 ? static_cast<double>(estimated) / frames : 0.0; }
+};
+Coverage evaluate_coverage(const std::vector<double>& frame_stamps,
+                           const std::vector<StampedPose>& gt,
+                           const std::vector<StampedPose>& est);
+
+}  // namespace rgbdtam

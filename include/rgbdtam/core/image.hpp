@@ -1,0 +1,62 @@
+#pragma once
+// A 2-D image whose storage is allocated once, at init, and never resized.
+// Pixel (x, y) has its centre at integer coordinates; x right, y down.
+
+#include <cstdint>
+#include <memory>
+
+#include "rgbdtam/core/assert.hpp"
+
+namespace rgbdtam {
+
+template <typename T>
+class Image {
+ public:
+  Image() = default;
+  // Init-time only: the one place an image allocates.
+  void allocate(int width, int height) {
+    RGBDTAM_ASSERT(width > 0 && height > 0, "image size must be positive");
+    width_ = width;
+    height_ = height;
+    data_.reset(new T[static_cast<size_t>(width) * static_cast<size_t>(height)]());
+  }
+  int width() const { return width_; }
+  int height() const { return height_; }
+  int size() const { return width_ * height_; }
+  T* data() { return data_.get(); }
+  const T* data() const { return data_.get(); }
+  T* row(int y) { return data_.get() + static_cast<size_t>(y) * width_; }
+  const T* row(int y) const { return data_.get() + static_cast<size_t>(y) * width_; }
+  T& at(int x, int y) { return row(y)[x]; }
+  const T& at(int x, int y) const { return row(y)[x]; }
+  void fill(T value) {
+    for (int i = 0; i < size(); ++i) data_[i] = value;
+  }
+  bool contains(float x, float y, float margin) const {
+    return x >= margin && y >= margin && x <= width_ - 1 - margin && y <= height_ - 1 - margin;
+  }
+
+ private:
+  std::unique_ptr<T[]> data_;
+  int width_ = 0;
+  int height_ = 0;
+};
+
+using ImageF = Image<float>;
+using ImageU8 = Image<uint8_t>;
+using ImageU16 = Image<uint16_t>;
+
+// Bilinear sample; the caller guarantees 0 <= x < w-1 and 0 <= y < h-1.
+inline float sample_bilinear(const ImageF& img, float x, float y) {
+  const int x0 = static_cast<int>(x);
+  const int y0 = static_cast<int>(y);
+  const float ax = x - static_cast<float>(x0);
+  const float ay = y - static_cast<float>(y0);
+  const float* r0 = img.row(y0) + x0;
+  const float* r1 = r0 + img.width();
+  const float top = r0[0] + ax * (r0[1] - r0[0]);
+  const float bottom = r1[0] + ax * (r1[1] - r1[0]);
+  return top + ay * (bottom - top);
+}
+
+}  // namespace rgbdtam

@@ -1,0 +1,45 @@
+#pragma once
+// Per-frame image and inverse-depth pyramids. Level 0 is the finest (full resolution);
+// each coarser level halves both sizes by 2x2 averaging (640x480 -> 80x60 over 4 levels).
+
+#include "rgbdtam/core/camera.hpp"
+
+namespace rgbdtam {
+
+constexpr int kPyramidLevels = 4;
+
+struct DepthRange {
+  double min_m = 0.3;
+  double max_m = 5.0;
+};
+
+class FramePyramid {
+ public:
+  void allocate(const PinholeIntrinsics& finest);
+
+  // gray[0] must already hold the undistorted [0,1] image; this builds the coarser levels.
+  void build_gray();
+  // Converts undistorted raw depth (units of 1/depth_factor m) to inverse depth and builds
+  // the coarser levels. A pixel outside the range is invalid (0).
+  void build_inverse_depth(const ImageU16& depth, double depth_factor, const DepthRange& range);
+  void clear_depth();
+
+  const PinholeIntrinsics& intrinsics(int level) const { return k_[level]; }
+  ImageF& gray(int level) { return gray_[level]; }
+  const ImageF& gray(int level) const { return gray_[level]; }
+  const ImageF& inverse_depth(int level) const { return inv_depth_[level]; }
+  bool has_depth() const { return has_depth_; }
+
+ private:
+  PinholeIntrinsics k_[kPyramidLevels];
+  ImageF gray_[kPyramidLevels];
+  ImageF inv_depth_[kPyramidLevels];  // 1/m; 0 = no measurement
+  bool has_depth_ = false;
+};
+
+// Central-difference gradients in intensity (or inverse-depth) units per pixel. Border
+// pixels, and inverse-depth pixels next to an invalid one, get 0.
+void compute_gradients(const ImageF& img, ImageF* gx, ImageF* gy);
+void compute_depth_gradients(const ImageF& inv_depth, ImageF* gx, ImageF* gy);
+
+}  // namespace rgbdtam

@@ -1,0 +1,113 @@
+#pragma once
+// RGBDTAM tracking (Concha & Civera, IROS 2017, sec. IV): photometric error on Canny-edge
+// points and a subsampled dense inverse-depth error, Geman-McClure weights on residuals scaled
+// by their standard deviations, gain and brightness, inverse-compositional Gauss-Newton on
+// SE(3) over a 4-level pyramid. All buffers are sized in allocate(); track() never allocates.
+
+#include <cstdint>
+
+#include "rgbdtam/core/canny.hpp"
+#include "rgbdtam/core/fixed_vector.hpp"
+#include "rgbdtam/core/pyramid.hpp"
+#include "rgbdtam/core/residuals.hpp"
+#include "rgbdtam/core/se3.hpp"
+
+namespace rgbdtam {
+
+struct TrackerOptions {
+  ResidualConfig residuals;
+  int photometric_points_finest = 8991;  // x1/3 per coarser level (paper: up to 8K per keyframe)
+  float gradient_top_fraction = 0.4f;    // photometric points keep the strongest 40 % gradients
+  float canny_low = 20.f;                // Sobel-3 magnitude, 8-bit grey levels
+  float canny_high = 60.f;
+  int max_iterations[kPyramidLevels] = {6, 8, 10, 15};  // finest first
+  double min_relative_decrease = 1e-3;   // stop a level when the cost improves less than this
+  double robust_c = 2.0;                 // Geman-McClure scale, in standard deviations
+  double geometric_weight = 1.0;         // lambda on the normalised geometric term
+  double inverse_depth_sigma = 0.0023;   // sigma_rho = sigma_d / (f b), 1/m
+  double keyframe_overlap = 0.85;        // new keyframe below this inlier overlap
+  bool gain_brightness = true;
+  bool motion_model = true;
+};
+
+// One residual point of a keyframe, in the keyframe's camera frame.
+struct TrackPoint {
+  float x, y, z;  // m
+  float ref;      // keyframe intensity [0,1], or keyframe inverse depth 1/m
+  float J[6];     // d residual / d (v, omega) at the identity, keyframe side
+};
+
+struct Keyframe {
+  uint32_t id = 0;
+  int64_t timestamp_ns = 0;
+  SE3 T_w_k;
+  FixedVector<TrackPoint> photometric[kPyramidLevels];
+  FixedVector<TrackPoint> geometric[kPyramidLevels];
+};
+
+// Selects a keyframe's residual points; owns its scratch images.
+class KeyframeBuilder {
+ public:
+  void allocate(const PinholeIntrinsics& finest, const TrackerOptions& opt);
+  void allocate_keyframe(Keyframe* kf) const;
+  void build(const FramePyramid& frame, uint32_t id, int64_t timestamp_ns, const SE3& T_w_k,
+             Keyframe* kf);
+  int edge_count() const { return edge_count_; }
+
+ private:
+  void select_photometric(const FramePyramid& frame, int level, FixedVector<TrackPoint>* out);
+  void select_geometric(const FramePyramid& frame, int level, FixedVector<TrackPoint>* out);
+  bool is_semidense_pixel(int level, int x, int y) const;
+
+  TrackerOptions opt_;
+  CannyDetector canny_;
+  ImageU8 edges_[kPyramidLevels];  // level l: some Canny edge inside the pixel's 2^l block
+  ImageF gx_[kPyramidLevels], gy_[kPyramidLevels];
+  ImageF dgx_[kPyramidLevels], dgy_[kPyramidLevels];
+  float gradient_threshold_[kPyramidLevels] = {};
+  int edge_count_ = 0;
+};
+
+enum class TrackingState : uint8_t { kOk = 0, kLost = 1 };
+
+struct TrackResult {
+  SE3 T_k_c;  // keyframe from current camera
+  TrackingState state = TrackingState::kLost;
+  double overlap = 0.0;          // finest-level inlier fraction of the keyframe points
+  double photometric_sigma = 0;  // robust scale of the finest level, intensity units
+  double gain = 1.0, brightness = 0.0;
+  int iterations = 0;
+  int residuals_used = 0;                   // finest level, valid photometric + geometric
+  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();  // finest J^T W J
+};
+
+class Tracker {
+ public:
+  void allocate(const Keyframe& capacity_model, const TrackerOptions& opt);
+  TrackResult track(const Keyframe& kf, const FramePyramid& frame, const SE3& T_k_c_guess);
+
+ private:
+  struct LevelCost {
+    double cost = 0.0;
+    int valid = 0;
+    int inliers = 0;
+    int total = 0;
+    Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
+    Vector6d g = Vector6d::Zero();
+  };
+  void sample_photometric(const FixedVector<TrackPoint>& pts, const ImageF& img,
+                          const PinholeIntrinsics& k, const SE3& T_c_k);
+  void sample_geometric(const FixedVector<TrackPoint>& pts, const ImageF& inv_depth,
+                        const PinholeIntrinsics& k, const SE3& T_c_k);
+  void estimate_gain_brightness(const FixedVector<TrackPoint>& pts);
+  double robust_scale(int n);
+  LevelCost accumulate(const FixedVector<TrackPoint>& ph, const FixedVector<TrackPoint>& geo);
+
+  TrackerOptions opt_;
+  // Per-point scratch, indexed like the keyframe's point sets.
+  const FixedVector<TrackPoint> no_points_;  // stands in for the geometric set without depth
+  FixedVector<float> ph_sample_, ph_residual_, geo_residual_, geo_sigma_, scratch_;
+  float gain_ = 1.f, brightness_ = 0.f, ph_sigma_ = 0.05f;
+};
+
+}  // namespace rgbdtam

@@ -1,0 +1,31 @@
+#pragma once
+// TUM trajectory files: `timestamp tx ty tz qx qy qz qw`, camera-to-world, metres.
+
+#include <cstdio>
+#include <vector>
+
+#include "rgbdtam/core/evaluation.hpp"
+#include "rgbdtam/core/status.hpp"
+#include "rgbdtam/runtime/messages.hpp"
+
+namespace rgbdtam {
+
+// Host-side reader for evaluation (allocates). Lines that do not parse are counted, not fatal.
+Status read_tum_trajectory(const char* path, std::vector<StampedPose>* out, int* bad_lines);
+// Timestamps of an rgb.txt-style list, in seconds.
+Status read_tum_stamps(const char* path, std::vector<double>* out);
+
+// Streams one line per valid pose through a buffer owned by the writer; no allocation.
+class TrajectoryWriter {
+ public:
+  ~TrajectoryWriter();
+  Status open(const char* path);
+  Status write(const PoseEstimate& pose);
+  Status close();
+
+ private:
+  std::FILE* file_ = nullptr;
+  char buffer_[1 << 16];
+};
+
+}  // namespace rgbdtam

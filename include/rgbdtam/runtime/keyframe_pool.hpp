@@ -1,0 +1,27 @@
+#pragma once
+// Fixed-capacity keyframe storage. Policy when full: recycle the oldest keyframe that is not
+// the current tracking reference, and count it; tracking never stops for a full pool.
+
+#include "rgbdtam/core/tracker.hpp"
+
+namespace rgbdtam {
+
+class KeyframePool {
+ public:
+  void allocate(int capacity, const KeyframeBuilder& builder);
+  // Returns a slot for a new keyframe; never the one at `keep`.
+  Keyframe* acquire(const Keyframe* keep);
+  int size() const { return used_; }
+  int capacity() const { return capacity_; }
+  int recycled() const { return recycled_; }
+
+ private:
+  std::unique_ptr<Keyframe[]> slots_;
+  std::unique_ptr<uint64_t[]> age_;  // creation order per slot
+  int capacity_ = 0;
+  int used_ = 0;
+  int recycled_ = 0;
+  uint64_t clock_ = 0;
+};
+
+}  // namespace rgbdtam

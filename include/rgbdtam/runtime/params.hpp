@@ -1,0 +1,42 @@
+#pragma once
+// Parameters, read once at start-up from a human-editable `key = value` file into an
+// immutable struct. The table in params.cpp is the one schema: every key's type, range,
+// unit and meaning, used to validate, print and document. Defaults are the members' initialisers.
+
+#include <cstdint>
+
+#include "rgbdtam/core/camera.hpp"
+#include "rgbdtam/core/pyramid.hpp"
+#include "rgbdtam/core/status.hpp"
+#include "rgbdtam/core/tracker.hpp"
+
+namespace rgbdtam {
+
+struct SensorModel {
+  double depth_factor = 5000.0;      // raw depth units per metre
+  DepthRange depth_range;            // valid sensor depth, m
+  double baseline_m = 0.075;         // projector-camera baseline
+  double depth_focal_px = 580.0;     // focal length of the IR camera
+  double disparity_sigma_px = 0.1;   // disparity noise of the structured-light matcher
+  int64_t max_rgb_depth_dt_ns = 20'000'000;  // pair colour and depth within 20 ms
+  // The paper's eq. for structured light: sigma_rho = sigma_d / (f b), constant in 1/m.
+  double inverse_depth_sigma() const { return disparity_sigma_px / (depth_focal_px * baseline_m); }
+};
+
+struct Params {
+  PinholeIntrinsics camera{517.3, 516.5, 318.6, 255.3, 640, 480};
+  RadTanDistortion distortion;
+  SensorModel sensor;
+  TrackerOptions tracker;
+  int keyframe_pool_size = 16;
+  int lost_frames_before_reset = 10;
+};
+
+// Parses `key = value` lines (# comments). `source` names the file in errors.
+Status parse_params(const char* text, const char* source, Params* out);
+// Applies one `key=value` override, e.g. from the command line.
+Status set_param(const char* assignment, const char* source, Params* out);
+// Writes every key with its current value, unit and meaning.
+void print_params(const Params& p, char* buf, int size);
+
+}  // namespace rgbdtam

@@ -1,0 +1,51 @@
+#pragma once
+// The tracking module: sensor frame -> frontend (undistortion, pyramids) -> tracker ->
+// keyframe decision -> pose estimate. Everything is sized in init(); process() never allocates.
+// Thread: the caller's (replay: main thread; runtime: the tracking task).
+
+#include "rgbdtam/runtime/keyframe_pool.hpp"
+#include "rgbdtam/runtime/messages.hpp"
+#include "rgbdtam/runtime/params.hpp"
+
+namespace rgbdtam {
+
+struct TrackingCounters {
+  uint32_t frames = 0;
+  uint32_t tracked = 0;
+  uint32_t lost = 0;
+  uint32_t without_depth = 0;
+  uint32_t keyframes = 0;
+  uint32_t resets = 0;
+};
+
+class TrackingPipeline {
+ public:
+  Status init(const Params& params);
+  PoseEstimate process(const SensorFrame& frame);
+
+  const TrackingCounters& counters() const { return counters_; }
+  const KeyframePool& keyframes() const { return pool_; }
+  const Params& params() const { return params_; }
+
+ private:
+  void start_keyframe(const SensorFrame& frame, const SE3& T_w_c, PoseEstimate* out);
+  SE3 predict_pose() const;
+
+  Params params_;
+  Undistorter undistorter_;
+  FramePyramid pyramid_;
+  ImageU16 depth_undistorted_;
+  KeyframeBuilder builder_;
+  KeyframePool pool_;
+  Tracker tracker_;
+  Keyframe* reference_ = nullptr;
+  uint32_t next_keyframe_id_ = 0;
+  // Last two valid poses for the constant-velocity prediction.
+  SE3 T_w_last_, T_w_before_last_;
+  int valid_history_ = 0;
+  int consecutive_lost_ = 0;
+  uint32_t reset_counter_ = 0;
+  TrackingCounters counters_;
+};
+
+}  // namespace rgbdtam

@@ -1,0 +1,158 @@
+// rgbdtam command line: replay a recorded sequence, evaluate a trajectory, show parameters.
+
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <string>
+
+#include "evaluate_command.hpp"
+#include "replay_job.hpp"
+#include "rgbdtam/hal/file.hpp"
+
+namespace rgbdtam {
+namespace {
+
+constexpr size_t kMaxConfigBytes = 1 << 20;
+
+void usage() {
+  std::fprintf(stderr,
+               "usage:\n"
+               "  rgbdtam replay <sequence-dir> --config <file> [--trajectory out.txt]\n"
+               "                 [--set key=value]... [--max-frames N] [--quiet]\n"
+               "  rgbdtam eval <groundtruth.txt> <estimate.txt> [--json] [--frames rgb.txt]\n"
+               "  rgbdtam params --config <file> [--set key=value]...\n");
+}
+
+// Shared by replay and params: --config and --set build the parameters.
+struct ConfigArgs {
+  const char* config = nullptr;
+  const char* overrides[64];
+  int override_count = 0;
+};
+
+bool take_config_arg(int argc, char** argv, int* i, ConfigArgs* c) {
+  if (std::strcmp(argv[*i], "--config") == 0 && *i + 1 < argc) {
+    c->config = argv[++*i];
+    return true;
+  }
+  if (std::strcmp(argv[*i], "--set") == 0 && *i + 1 < argc && c->override_count < 64) {
+    c->overrides[c->override_count++] = argv[++*i];
+    return true;
+  }
+  return false;
+}
+
+Status load_params(const ConfigArgs& c, Params* p) {
+  if (c.config == nullptr) {
+    return Status::error(StatusCode::kInvalidArgument, "--config <file> is required");
+  }
+  char* text = nullptr;
+  RGBDTAM_RETURN_IF_ERROR(read_text_file(c.config, kMaxConfigBytes, &text));
+  const Status s = parse_params(text, c.config, p);
+  delete[] text;
+  RGBDTAM_RETURN_IF_ERROR(s);
+  for (int i = 0; i < c.override_count; ++i) {
+    RGBDTAM_RETURN_IF_ERROR(set_param(c.overrides[i], "--set", p));
+  }
+  return Status::ok();
+}
+
+int params_command(int argc, char** argv) {
+  ConfigArgs c;
+  for (int i = 0; i < argc; ++i) {
+    if (!take_config_arg(argc, argv, &i, &c)) {
+      std::fprintf(stderr, "rgbdtam params: unknown argument '%s'\n", argv[i]);
+      return 2;
+    }
+  }
+  Params p;
+  const Status s = load_params(c, &p);
+  if (!s.is_ok()) {
+    std::fprintf(stderr, "rgbdtam params: %s\n", s.message());
+    return 1;
+  }
+  static char buf[16384];
+  print_params(p, buf, sizeof(buf));
+  std::fputs(buf, stdout);
+  return 0;
+}
+
+int replay_command(int argc, char** argv) {
+  ConfigArgs c;
+  ReplayOptions options;
+  for (int i = 0; i < argc; ++i) {
+    if (take_config_arg(argc, argv, &i, &c)) continue;
+    if (std::strcmp(argv[i], "--trajectory") == 0 && i + 1 < argc) {
+      options.trajectory_path = argv[++i];
+    } else if (std::strcmp(argv[i], "--max-frames") == 0 && i + 1 < argc) {
+      options.max_frames = std::atoi(argv[++i]);
+    } else if (std::strcmp(argv[i], "--quiet") == 0) {
+      options.progress = false;
+    } else if (argv[i][0] != '-' && options.sequence == nullptr) {
+      options.sequence = argv[i];
+    } else {
+      std::fprintf(stderr, "rgbdtam replay: unknown argument '%s'\n", argv[i]);
+      usage();
+      return 2;
+    }
+  }
+  if (options.sequence == nullptr) {
+    usage();
+    return 2;
+  }
+  Status s = load_params(c, &options.params);
+  if (!s.is_ok()) {
+    std::fprintf(stderr, "rgbdtam replay: %s\n", s.message());
+    return 1;
+  }
+  auto job = std::make_unique<ReplayJob>();
+  s = job->init(options);
+  if (!s.is_ok()) {
+    std::fprintf(stderr, "rgbdtam replay: %s\n", s.message());
+    return 1;
+  }
+  while (job->step()) {
+  }
+  s = job->finish();
+  if (!s.is_ok()) std::fprintf(stderr, "rgbdtam replay: %s\n", s.message());
+  job->print_summary();
+  if (options.trajectory_path != nullptr) {
+    std::printf("trajectory: %s (%zu poses)\n", options.trajectory_path, job->estimates().size());
+  }
+  // Evaluate against the sequence's own ground truth when it has one.
+  const std::string gt_path = std::string(options.sequence) + "/groundtruth.txt";
+  std::vector<StampedPose> gt;
+  int bad = 0;
+  if (read_tum_trajectory(gt_path.c_str(), &gt, &bad).is_ok()) {
+    std::vector<double> stamps;
+    for (int i = 0; i < job->source().rgb_list().size; ++i) {
+      stamps.push_back(job->source().rgb_list().entries[i].timestamp_ns * 1e-9);
+    }
+    if (options.max_frames > 0 && static_cast<int>(stamps.size()) > options.max_frames) {
+      stamps.resize(static_cast<size_t>(options.max_frames));
+    }
+    print_report(evaluate_all(gt, job->estimates(), &stamps), false, "all frames");
+  }
+  return s.is_ok() ? 0 : 1;
+}
+
+}  // namespace
+}  // namespace rgbdtam
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    rgbdtam::usage();
+    return 2;
+  }
+  const char* verb = argv[1];
+  if (std::strcmp(verb, "replay") == 0) return rgbdtam::replay_command(argc - 2, argv + 2);
+  if (std::strcmp(verb, "eval") == 0) return rgbdtam::evaluate_command(argc - 2, argv + 2);
+  if (std::strcmp(verb, "params") == 0) return rgbdtam::params_command(argc - 2, argv + 2);
+  if (std::strcmp(verb, "--help") == 0 || std::strcmp(verb, "help") == 0) {
+    rgbdtam::usage();
+    return 0;
+  }
+  std::fprintf(stderr, "rgbdtam: unknown command '%s'\n", verb);
+  rgbdtam::usage();
+  return 2;
+}

@@ -1,0 +1,99 @@
+#include "replay_job.hpp"
+
+#include <cstdio>
+
+#include "rgbdtam/hal/clock.hpp"
+
+namespace rgbdtam {
+namespace {
+// Past this many, problems are counted in the summary but not printed one by one.
+constexpr int kMaxProblemsPrinted = 20;
+constexpr int kProgressEvery = 100;
+}  // namespace
+
+Status ReplayJob::init(const ReplayOptions& options) {
+  options_ = options;
+  const Params& p = options.params;
+  RGBDTAM_RETURN_IF_ERROR(source_.open(options.sequence, p.camera.width_px, p.camera.height_px,
+                                       p.sensor.max_rgb_depth_dt_ns));
+  if (source_.rgb_list().bad_lines > 0) {
+    std::fprintf(stderr, "warning: %d unreadable lines in rgb.txt, skipped; first: %s\n",
+                 source_.rgb_list().bad_lines, source_.rgb_list().first_problem.message());
+  }
+  if (source_.depth_list().bad_lines > 0) {
+    std::fprintf(stderr, "warning: %d unreadable lines in depth.txt, skipped; first: %s\n",
+                 source_.depth_list().bad_lines, source_.depth_list().first_problem.message());
+  }
+  RGBDTAM_RETURN_IF_ERROR(pipeline_.init(p));
+  if (options.trajectory_path != nullptr) {
+    RGBDTAM_RETURN_IF_ERROR(writer_.open(options.trajectory_path));
+  }
+  estimates_.reserve(static_cast<size_t>(source_.frame_count()));
+  started_ns_ = monotonic_ns();
+  return Status::ok();
+}
+
+bool ReplayJob::step() {
+  if (options_.max_frames > 0 && processed_ >= options_.max_frames) return false;
+  const int64_t t0 = monotonic_ns();
+  SensorFrame frame;
+  Status warning;
+  const Status s = source_.next(&frame, &warning);
+  if (s.code() == StatusCode::kEndOfStream) return false;
+  ++processed_;
+  if (!s.is_ok() || !warning.is_ok()) {
+    if (reported_problems_++ < kMaxProblemsPrinted) {
+      std::fprintf(stderr, "%s: %s\n", s.is_ok() ? "warning" : "skipped frame",
+                   s.is_ok() ? warning.message() : s.message());
+    }
+    if (!s.is_ok()) return true;
+  }
+  const int64_t t1 = monotonic_ns();
+  last_pose_ = pipeline_.process(frame);
+  const int64_t t2 = monotonic_ns();
+  const Status w = writer_.write(last_pose_);
+  if (!w.is_ok() && reported_problems_++ < kMaxProblemsPrinted) {
+    std::fprintf(stderr, "error: %s\n", w.message());
+  }
+  if ((last_pose_.flags & kPoseValid) != 0) {
+    estimates_.push_back({static_cast<double>(last_pose_.timestamp_ns) * 1e-9, last_pose_.T_w_c});
+  }
+  const int64_t t3 = monotonic_ns();
+  tracking_ms_.add(t2 - t1);
+  frame_ms_.add(t3 - t0);
+  if (options_.progress && processed_ % kProgressEvery == 0) {
+    std::fprintf(stderr, "[%5d/%d] tracking %.1f ms median, %u keyframes, %u lost\n", processed_,
+                 source_.frame_count(), tracking_ms_.percentile_ms(0.5),
+                 pipeline_.counters().keyframes, pipeline_.counters().lost);
+  }
+  return true;
+}
+
+Status ReplayJob::finish() {
+  finished_ns_ = monotonic_ns();
+  return writer_.close();
+}
+
+void ReplayJob::print_summary() const {
+  const TrackingCounters& c = pipeline_.counters();
+  const ReplayCounters& rc = source_.counters();
+  const double seconds = static_cast<double>(finished_ns_ - started_ns_) * 1e-9;
+  char residuals[16];
+  options_.params.tracker.residuals.name(residuals, sizeof(residuals));
+  std::printf("sequence: %s (%d frames listed), residuals %s\n", options_.sequence,
+              source_.frame_count(), residuals);
+  std::printf("frames: read %u, skipped %u, without depth %u; tracked %u, lost %u, resets %u\n",
+              rc.delivered, rc.skipped, rc.without_depth, c.tracked, c.lost, c.resets);
+  std::printf("keyframes: %u created, pool %d of %d, %d recycled\n", c.keyframes,
+              pipeline_.keyframes().size(), pipeline_.keyframes().capacity(),
+              pipeline_.keyframes().recycled());
+  std::printf("tracking ms/frame: median %.2f, p95 %.2f, max %.2f\n",
+              tracking_ms_.percentile_ms(0.5), tracking_ms_.percentile_ms(0.95),
+              tracking_ms_.max_ms());
+  std::printf("whole frame ms (decode + tracking + output): median %.2f, p95 %.2f; %.1f fps "
+              "overall\n",
+              frame_ms_.percentile_ms(0.5), frame_ms_.percentile_ms(0.95),
+              seconds > 0 ? static_cast<double>(processed_) / seconds : 0.0);
+}
+
+}  // namespace rgbdtam

@@ -1,0 +1,51 @@
+#pragma once
+// Replays a recorded sequence through the tracking pipeline: source -> pipeline -> writer.
+// init() allocates everything; step() processes one frame without allocating.
+
+#include <vector>
+
+#include "rgbdtam/core/evaluation.hpp"
+#include "rgbdtam/hal/tum_replay_source.hpp"
+#include "rgbdtam/hal/tum_trajectory.hpp"
+#include "rgbdtam/runtime/latency_stats.hpp"
+#include "rgbdtam/runtime/tracking_pipeline.hpp"
+
+namespace rgbdtam {
+
+struct ReplayOptions {
+  const char* sequence = nullptr;
+  const char* trajectory_path = nullptr;  // optional
+  Params params;
+  bool progress = true;
+  int max_frames = 0;  // 0 = all
+};
+
+class ReplayJob {
+ public:
+  Status init(const ReplayOptions& options);
+  // Processes the next frame; false when the sequence has ended.
+  bool step();
+  Status finish();  // flushes the trajectory
+  void print_summary() const;
+
+  const std::vector<StampedPose>& estimates() const { return estimates_; }
+  const TrackingCounters& counters() const { return pipeline_.counters(); }
+  const LatencyStats& tracking_time() const { return tracking_ms_; }
+  const LatencyStats& frame_time() const { return frame_ms_; }
+  const TumReplaySource& source() const { return source_; }
+  const PoseEstimate& last_pose() const { return last_pose_; }
+
+ private:
+  ReplayOptions options_;
+  TumReplaySource source_;
+  TrackingPipeline pipeline_;
+  TrajectoryWriter writer_;
+  std::vector<StampedPose> estimates_;  // reserved for every frame at init
+  LatencyStats tracking_ms_, frame_ms_;
+  PoseEstimate last_pose_;
+  int processed_ = 0;
+  int reported_problems_ = 0;
+  int64_t started_ns_ = 0, finished_ns_ = 0;
+};
+
+}  // namespace rgbdtam

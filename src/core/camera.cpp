@@ -1,0 +1,93 @@
+#include "rgbdtam/core/camera.hpp"
+
+#include <cmath>
+
+namespace rgbdtam {
+
+void RadTanDistortion::distort(double x, double y, double* xd, double* yd) const {
+  const double r2 = x * x + y * y;
+  const double radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+  *xd = x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
+  *yd = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y;
+}
+
+void RadTanDistortion::undistort(double xd, double yd, double* x, double* y) const {
+  double ux = xd, uy = yd;
+  for (int i = 0; i < 50; ++i) {
+    double dx, dy;
+    distort(ux, uy, &dx, &dy);
+    const double ex = dx - xd, ey = dy - yd;
+    ux -= ex;
+    uy -= ey;
+    if (ex * ex + ey * ey < 1e-24) break;
+  }
+  *x = ux;
+  *y = uy;
+}
+
+void Undistorter::init(const PinholeIntrinsics& k, const RadTanDistortion& d) {
+  width_ = k.width_px;
+  height_ = k.height_px;
+  identity_ = d.is_zero();
+  if (identity_) return;
+  const size_t n = static_cast<size_t>(width_) * static_cast<size_t>(height_);
+  taps_.reset(new BilinearTap[n]);
+  nearest_.reset(new int32_t[n]);
+  for (int v = 0; v < height_; ++v) {
+    for (int u = 0; u < width_; ++u) {
+      const double x = (u - k.cx_px) / k.fx_px;
+      const double y = (v - k.cy_px) / k.fy_px;
+      double xd, yd;
+      d.distort(x, y, &xd, &yd);
+      const double su = k.fx_px * xd + k.cx_px;
+      const double sv = k.fy_px * yd + k.cy_px;
+      const size_t i = static_cast<size_t>(v) * width_ + u;
+      const bool inside = su >= 0.0 && sv >= 0.0 && su < width_ - 1 && sv < height_ - 1;
+      if (inside) {
+        const int x0 = static_cast<int>(su), y0 = static_cast<int>(sv);
+        taps_[i] = {y0 * width_ + x0, static_cast<float>(su - x0), static_cast<float>(sv - y0)};
+      } else {
+        taps_[i] = {-1, 0.f, 0.f};
+      }
+      const long nu = std::lround(su), nv = std::lround(sv);
+      nearest_[i] = (nu >= 0 && nv >= 0 && nu < width_ && nv < height_)
+                        ? static_cast<int32_t>(nv * width_ + nu)
+                        : -1;
+    }
+  }
+}
+
+void Undistorter::undistort_gray(const uint8_t* raw, ImageF* out) const {
+  constexpr float kToUnit = 1.0f / 255.0f;
+  float* dst = out->data();
+  const int n = width_ * height_;
+  if (identity_) {
+    for (int i = 0; i < n; ++i) dst[i] = raw[i] * kToUnit;
+    return;
+  }
+  for (int i = 0; i < n; ++i) {
+    const BilinearTap& t = taps_[i];
+    if (t.index < 0) {
+      dst[i] = 0.f;
+      continue;
+    }
+    const uint8_t* p = raw + t.index;
+    const float top = p[0] + t.ax * (p[1] - p[0]);
+    const float bottom = p[width_] + t.ax * (p[width_ + 1] - p[width_]);
+    dst[i] = (top + t.ay * (bottom - top)) * kToUnit;
+  }
+}
+
+void Undistorter::undistort_depth(const uint16_t* raw, ImageU16* out) const {
+  uint16_t* dst = out->data();
+  const int n = width_ * height_;
+  for (int i = 0; i < n; ++i) {
+    if (identity_) {
+      dst[i] = raw[i];
+    } else {
+      dst[i] = nearest_[i] < 0 ? 0 : raw[nearest_[i]];
+    }
+  }
+}
+
+}  // namespace rgbdtam

@@ -1,0 +1,191 @@
+#include "rgbdtam/core/evaluation.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/SVD>
+
+namespace rgbdtam {
+namespace {
+std::vector<double> stamps_of(const std::vector<StampedPose>& t) {
+  std::vector<double> s;
+  s.reserve(t.size());
+  for (const StampedPose& p : t) s.push_back(p.stamp_s);
+  return s;
+}
+
+double median_of(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);  // numpy.median
+}
+
+// evaluate_rpe.py's find_closest_index: a bisection that remembers the closest probe.
+int find_closest_index(const std::vector<double>& list, double t) {
+  int beginning = 0, end = static_cast<int>(list.size()), best = 0;
+  double difference = std::fabs(list[0] - t);
+  while (beginning < end) {
+    const int middle = (end + beginning) / 2;
+    if (std::fabs(list[middle] - t) < difference) {
+      difference = std::fabs(list[middle] - t);
+      best = middle;
+    }
+    if (t == list[middle]) return middle;
+    if (list[middle] > t) {
+      end = middle;
+    } else {
+      beginning = middle + 1;
+    }
+  }
+  return best;
+}
+}  // namespace
+
+std::vector<std::pair<int, int>> associate(const std::vector<double>& first,
+                                           const std::vector<double>& second, double offset,
+                                           double max_difference) {
+  struct Candidate {
+    double diff;
+    int a, b;
+  };
+  std::vector<Candidate> candidates;
+  for (int a = 0; a < static_cast<int>(first.size()); ++a) {
+    // second is sorted, so only a window can be within max_difference.
+    const double lo = first[a] - offset - max_difference;
+    auto it = std::lower_bound(second.begin(), second.end(), lo);
+    for (; it != second.end(); ++it) {
+      const double diff = std::fabs(first[a] - (*it + offset));
+      if (*it + offset > first[a] + max_difference) break;
+      if (diff < max_difference) candidates.push_back({diff, a, static_cast<int>(it - second.begin())});
+    }
+  }
+  // Python's sort is stable on (diff, a, b) tuples.
+  std::sort(candidates.begin(), candidates.end(), [](const Candidate& x, const Candidate& y) {
+    if (x.diff != y.diff) return x.diff < y.diff;
+    if (x.a != y.a) return x.a < y.a;
+    return x.b < y.b;
+  });
+  std::vector<char> used_a(first.size(), 0), used_b(second.size(), 0);
+  std::vector<std::pair<int, int>> matches;
+  for (const Candidate& c : candidates) {
+    if (used_a[c.a] || used_b[c.b]) continue;
+    used_a[c.a] = used_b[c.b] = 1;
+    matches.emplace_back(c.a, c.b);
+  }
+  std::sort(matches.begin(), matches.end());
+  return matches;
+}
+
+bool evaluate_ate(const std::vector<StampedPose>& gt, const std::vector<StampedPose>& est,
+                  AteResult* out) {
+  // evaluate_ate.py: first_file = ground truth, second_file = estimate.
+  const auto matches = associate(stamps_of(gt), stamps_of(est));
+  if (matches.size() < 2) return false;
+  const int n = static_cast<int>(matches.size());
+  Eigen::Matrix3Xd model(3, n), data(3, n);  // model = estimate, data = ground truth
+  for (int i = 0; i < n; ++i) {
+    model.col(i) = est[matches[i].second].T_w_c.translation();
+    data.col(i) = gt[matches[i].first].T_w_c.translation();
+  }
+  const Vector3d model_mean = model.rowwise().mean();
+  const Vector3d data_mean = data.rowwise().mean();
+  const Eigen::Matrix3Xd mz = model.colwise() - model_mean;
+  const Eigen::Matrix3Xd dz = data.colwise() - data_mean;
+  Matrix3d W = Matrix3d::Zero();
+  for (int i = 0; i < n; ++i) W += mz.col(i) * dz.col(i).transpose();
+  Eigen::JacobiSVD<Matrix3d> svd(W.transpose(), Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Matrix3d S = Matrix3d::Identity();
+  if (svd.matrixU().determinant() * svd.matrixV().determinant() < 0) S(2, 2) = -1;
+  const Matrix3d R = svd.matrixU() * S * svd.matrixV().transpose();
+  const Vector3d t = data_mean - R * model_mean;
+  std::vector<double> err(static_cast<size_t>(n));
+  double sum = 0, sum2 = 0;
+  for (int i = 0; i < n; ++i) {
+    err[i] = (R * model.col(i) + t - data.col(i)).norm();
+    sum += err[i];
+    sum2 += err[i] * err[i];
+  }
+  out->compared = n;
+  out->rmse_m = std::sqrt(sum2 / n);
+  out->mean_m = sum / n;
+  out->median_m = median_of(err);
+  out->std_m = std::sqrt(std::max(0.0, sum2 / n - out->mean_m * out->mean_m));
+  out->min_m = *std::min_element(err.begin(), err.end());
+  out->max_m = *std::max_element(err.begin(), err.end());
+  out->T_gt_est = SE3(Eigen::Quaterniond(R), t);
+  return true;
+}
+
+bool evaluate_rpe(const std::vector<StampedPose>& gt, const std::vector<StampedPose>& est,
+                  double delta_s, RpeResult* out) {
+  if (gt.size() < 2 || est.size() < 2) return false;
+  const std::vector<double> stamps_gt = stamps_of(gt);
+  const std::vector<double> stamps_est = stamps_of(est);
+  std::vector<std::pair<int, int>> pairs;
+  for (int i = 0; i < static_cast<int>(est.size()); ++i) {
+    const int j = find_closest_index(stamps_est, stamps_est[i] + delta_s);
+    if (j != static_cast<int>(est.size()) - 1) pairs.emplace_back(i, j);
+  }
+  // The benchmark subsamples beyond 10000 pairs with Python's RNG; sequences here stay below.
+  std::vector<double> gt_intervals;
+  for (size_t i = 1; i < stamps_gt.size(); ++i) gt_intervals.push_back(stamps_gt[i] - stamps_gt[i - 1]);
+  const double max_dt = 2.0 * median_of(gt_intervals);
+  std::vector<double> trans, rot;
+  for (const auto& [i, j] : pairs) {
+    const int g0 = find_closest_index(stamps_gt, stamps_est[i]);
+    const int g1 = find_closest_index(stamps_gt, stamps_est[j]);
+    if (std::fabs(stamps_gt[g0] - stamps_est[i]) > max_dt ||
+        std::fabs(stamps_gt[g1] - stamps_est[j]) > max_dt) {
+      continue;
+    }
+    // ominus(a, b) = a^-1 b; error = ominus(ominus(P_j, P_i), ominus(Q_j, Q_i)).
+    const SE3 d_est = est[j].T_w_c.inverse() * est[i].T_w_c;
+    const SE3 d_gt = gt[g1].T_w_c.inverse() * gt[g0].T_w_c;
+    const SE3 e = d_est.inverse() * d_gt;
+    trans.push_back(e.translation().norm());
+    const double c = std::min(1.0, std::max(-1.0, (e.rotation().trace() - 1.0) / 2.0));
+    rot.push_back(std::acos(c) * 180.0 / M_PI);
+  }
+  if (trans.empty()) return false;
+  auto rms = [](const std::vector<double>& v) {
+    double s = 0;
+    for (double x : v) s += x * x;
+    return std::sqrt(s / v.size());
+  };
+  auto mean = [](const std::vector<double>& v) {
+    double s = 0;
+    for (double x : v) s += x;
+    return s / v.size();
+  };
+  out->compared = static_cast<int>(trans.size());
+  out->trans_rmse_m = rms(trans);
+  out->trans_mean_m = mean(trans);
+  out->trans_median_m = median_of(trans);
+  out->rot_rmse_deg = rms(rot);
+  out->rot_mean_deg = mean(rot);
+  out->rot_median_deg = median_of(rot);
+  return true;
+}
+
+Coverage evaluate_coverage(const std::vector<double>& frame_stamps,
+                           const std::vector<StampedPose>& gt,
+                           const std::vector<StampedPose>& est) {
+  Coverage c;
+  const std::vector<double> gt_stamps = stamps_of(gt);
+  const std::vector<double> est_stamps = stamps_of(est);
+  auto has_near = [](const std::vector<double>& sorted, double t) {
+    auto it = std::lower_bound(sorted.begin(), sorted.end(), t - 0.02);
+    return it != sorted.end() && std::fabs(*it - t) < 0.02;
+  };
+  for (double t : frame_stamps) {
+    if (!has_near(gt_stamps, t)) continue;
+    ++c.frames;
+    // The trajectory is stamped with the colour timestamps themselves.
+    auto it = std::lower_bound(est_stamps.begin(), est_stamps.end(), t - 1e-6);
+    if (it != est_stamps.end() && std::fabs(*it - t) < 1e-6) ++c.estimated;
+  }
+  return c;
+}
+
+}  // namespace rgbdtam

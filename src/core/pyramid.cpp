@@ -1,0 +1,114 @@
+#include "rgbdtam/core/pyramid.hpp"
+
+#include <algorithm>
+
+namespace rgbdtam {
+namespace {
+// Inverse depths in one 2x2 block are averaged only when they agree within this ratio;
+// otherwise the block straddles a depth edge and is left invalid.
+constexpr float kDepthBlockAgreement = 0.9f;
+
+void downsample_gray(const ImageF& fine, ImageF* coarse) {
+  for (int y = 0; y < coarse->height(); ++y) {
+    const float* r0 = fine.row(2 * y);
+    const float* r1 = fine.row(2 * y + 1);
+    float* out = coarse->row(y);
+    for (int x = 0; x < coarse->width(); ++x) {
+      out[x] = 0.25f * (r0[2 * x] + r0[2 * x + 1] + r1[2 * x] + r1[2 * x + 1]);
+    }
+  }
+}
+
+void downsample_inverse_depth(const ImageF& fine, ImageF* coarse) {
+  for (int y = 0; y < coarse->height(); ++y) {
+    const float* r0 = fine.row(2 * y);
+    const float* r1 = fine.row(2 * y + 1);
+    float* out = coarse->row(y);
+    for (int x = 0; x < coarse->width(); ++x) {
+      const float v[4] = {r0[2 * x], r0[2 * x + 1], r1[2 * x], r1[2 * x + 1]};
+      float sum = 0.f, lo = 1e30f, hi = 0.f;
+      int n = 0;
+      for (float d : v) {
+        if (d > 0.f) {
+          sum += d;
+          lo = std::min(lo, d);
+          hi = std::max(hi, d);
+          ++n;
+        }
+      }
+      out[x] = (n >= 2 && lo >= kDepthBlockAgreement * hi) ? sum / static_cast<float>(n) : 0.f;
+    }
+  }
+}
+}  // namespace
+
+void FramePyramid::allocate(const PinholeIntrinsics& finest) {
+  RGBDTAM_ASSERT(finest.width_px % (1 << (kPyramidLevels - 1)) == 0 &&
+                     finest.height_px % (1 << (kPyramidLevels - 1)) == 0,
+                 "image size must be divisible by 8 for a 4-level pyramid");
+  k_[0] = finest;
+  for (int l = 1; l < kPyramidLevels; ++l) k_[l] = k_[l - 1].half();
+  for (int l = 0; l < kPyramidLevels; ++l) {
+    gray_[l].allocate(k_[l].width_px, k_[l].height_px);
+    inv_depth_[l].allocate(k_[l].width_px, k_[l].height_px);
+  }
+}
+
+void FramePyramid::build_gray() {
+  for (int l = 1; l < kPyramidLevels; ++l) downsample_gray(gray_[l - 1], &gray_[l]);
+}
+
+void FramePyramid::build_inverse_depth(const ImageU16& depth, double depth_factor,
+                                       const DepthRange& range) {
+  const float scale = static_cast<float>(1.0 / depth_factor);
+  const float lo = static_cast<float>(range.min_m), hi = static_cast<float>(range.max_m);
+  const uint16_t* src = depth.data();
+  float* dst = inv_depth_[0].data();
+  for (int i = 0; i < depth.size(); ++i) {
+    const float z = src[i] * scale;
+    dst[i] = (z >= lo && z <= hi) ? 1.0f / z : 0.f;
+  }
+  for (int l = 1; l < kPyramidLevels; ++l) downsample_inverse_depth(inv_depth_[l - 1], &inv_depth_[l]);
+  has_depth_ = true;
+}
+
+void FramePyramid::clear_depth() {
+  for (auto& img : inv_depth_) img.fill(0.f);
+  has_depth_ = false;
+}
+
+void compute_gradients(const ImageF& img, ImageF* gx, ImageF* gy) {
+  const int w = img.width(), h = img.height();
+  gx->fill(0.f);
+  gy->fill(0.f);
+  for (int y = 1; y < h - 1; ++y) {
+    const float* r = img.row(y);
+    const float* up = img.row(y - 1);
+    const float* down = img.row(y + 1);
+    float* ox = gx->row(y);
+    float* oy = gy->row(y);
+    for (int x = 1; x < w - 1; ++x) {
+      ox[x] = 0.5f * (r[x + 1] - r[x - 1]);
+      oy[x] = 0.5f * (down[x] - up[x]);
+    }
+  }
+}
+
+void compute_depth_gradients(const ImageF& d, ImageF* gx, ImageF* gy) {
+  const int w = d.width(), h = d.height();
+  gx->fill(0.f);
+  gy->fill(0.f);
+  for (int y = 1; y < h - 1; ++y) {
+    const float* r = d.row(y);
+    const float* up = d.row(y - 1);
+    const float* down = d.row(y + 1);
+    float* ox = gx->row(y);
+    float* oy = gy->row(y);
+    for (int x = 1; x < w - 1; ++x) {
+      if (r[x - 1] > 0.f && r[x + 1] > 0.f) ox[x] = 0.5f * (r[x + 1] - r[x - 1]);
+      if (up[x] > 0.f && down[x] > 0.f) oy[x] = 0.5f * (down[x] - up[x]);
+    }
+  }
+}
+
+}  // namespace rgbdtam

@@ -1,0 +1,290 @@
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Cholesky>
+
+#include "rgbdtam/core/tracker.hpp"
+
+namespace rgbdtam {
+namespace {
+constexpr float kInvalid = -1.f;    // marks a point that projects outside or has no data
+constexpr float kMinDepthM = 0.05f;
+constexpr float kMadToSigma = 1.4826f;
+constexpr float kMinPhotometricSigma = 1.f / 255.f;
+constexpr float kGainInlier = 0.2f;   // |I_cur - I_kf| below which a point informs gain/brightness
+constexpr float kInlierSigmas = 3.f;  // overlap counts points within 3 standard deviations
+constexpr float kDepthAgreement = 0.9f;
+
+struct Projector {
+  float r[9], t[3];
+  float fx, fy, cx, cy;
+  Projector(const SE3& T, const PinholeIntrinsics& k) {
+    const Matrix3d R = T.rotation();
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) r[3 * i + j] = static_cast<float>(R(i, j));
+      t[i] = static_cast<float>(T.translation()[i]);
+    }
+    fx = static_cast<float>(k.fx_px);
+    fy = static_cast<float>(k.fy_px);
+    cx = static_cast<float>(k.cx_px);
+    cy = static_cast<float>(k.cy_px);
+  }
+  // Returns false when the point is behind the camera.
+  bool project(const TrackPoint& p, float* u, float* v, float* z) const {
+    const float qx = r[0] * p.x + r[1] * p.y + r[2] * p.z + t[0];
+    const float qy = r[3] * p.x + r[4] * p.y + r[5] * p.z + t[1];
+    const float qz = r[6] * p.x + r[7] * p.y + r[8] * p.z + t[2];
+    if (qz < kMinDepthM) return false;
+    const float iz = 1.f / qz;
+    *u = fx * qx * iz + cx;
+    *v = fy * qy * iz + cy;
+    *z = qz;
+    return true;
+  }
+};
+
+// Symmetric 6x6 normal equations, accumulated in double for a stable sum of ~10^4 terms.
+struct NormalEquations {
+  double h[21] = {0};
+  double g[6] = {0};
+  // x is the normalised residual r / sigma and j_scale = 1 / sigma normalises J alike.
+  void add(const float J[6], double j_scale, double weight, double x) {
+    double j[6], wj[6];
+    for (int i = 0; i < 6; ++i) {
+      j[i] = j_scale * J[i];
+      wj[i] = weight * j[i];
+    }
+    int k = 0;
+    for (int i = 0; i < 6; ++i) {
+      g[i] += wj[i] * x;
+      for (int c = i; c < 6; ++c) h[k++] += wj[i] * j[c];
+    }
+  }
+  void write(Eigen::Matrix<double, 6, 6>* H, Vector6d* grad, double scale) const {
+    int k = 0;
+    for (int i = 0; i < 6; ++i) {
+      (*grad)[i] += scale * g[i];
+      for (int j = i; j < 6; ++j) {
+        (*H)(i, j) += scale * h[k];
+        if (i != j) (*H)(j, i) += scale * h[k];
+        ++k;
+      }
+    }
+  }
+};
+
+// Geman-McClure: rho(x) = x^2 / (2 (1 + x^2/c^2)), weight = rho'(x)/x = 1 / (1 + x^2/c^2)^2.
+struct GemanMcClure {
+  double inv_c2;
+  explicit GemanMcClure(double c) : inv_c2(1.0 / (c * c)) {}
+  double cost(double x) const { return 0.5 * x * x / (1.0 + x * x * inv_c2); }
+  double weight(double x) const {
+    const double d = 1.0 + x * x * inv_c2;
+    return 1.0 / (d * d);
+  }
+  double saturated_cost() const { return 0.5 / inv_c2; }
+};
+}  // namespace
+
+void Tracker::allocate(const Keyframe& model, const TrackerOptions& opt) {
+  opt_ = opt;
+  int ph = 0, geo = 0;
+  for (int l = 0; l < kPyramidLevels; ++l) {
+    ph = std::max(ph, model.photometric[l].capacity());
+    geo = std::max(geo, model.geometric[l].capacity());
+  }
+  ph_sample_.reserve_once(std::max(ph, 1));
+  ph_residual_.reserve_once(std::max(ph, 1));
+  geo_residual_.reserve_once(std::max(geo, 1));
+  geo_sigma_.reserve_once(std::max(geo, 1));
+  scratch_.reserve_once(std::max(ph, 1));
+}
+
+void Tracker::sample_photometric(const FixedVector<TrackPoint>& pts, const ImageF& img,
+                                 const PinholeIntrinsics& k, const SE3& T_c_k) {
+  const Projector proj(T_c_k, k);
+  ph_sample_.clear();
+  for (const TrackPoint& p : pts) {
+    float u, v, z;
+    float s = kInvalid;
+    if (proj.project(p, &u, &v, &z) && img.contains(u, v, 1.f)) s = sample_bilinear(img, u, v);
+    (void)ph_sample_.push_back(s);
+  }
+}
+
+void Tracker::estimate_gain_brightness(const FixedVector<TrackPoint>& pts) {
+  if (!opt_.gain_brightness) return;
+  // Least squares a*I_cur + b = I_kf over points whose intensities roughly agree.
+  double s_cc = 0, s_c = 0, s_ck = 0, s_k = 0, n = 0;
+  for (int i = 0; i < pts.size(); ++i) {
+    const float c = ph_sample_[i];
+    if (c == kInvalid) continue;
+    const float kf = pts[i].ref;
+    if (std::fabs(gain_ * c + brightness_ - kf) > kGainInlier) continue;
+    s_cc += c * c;
+    s_c += c;
+    s_ck += c * kf;
+    s_k += kf;
+    n += 1;
+  }
+  const double det = s_cc * n - s_c * s_c;
+  if (n < 50 || det <= 1e-9 * n * n) return;
+  const double a = (s_ck * n - s_c * s_k) / det;
+  const double b = (s_cc * s_k - s_c * s_ck) / det;
+  if (a < 0.5 || a > 2.0) return;  // an implausible gain means a bad alignment, not light
+  gain_ = static_cast<float>(a);
+  brightness_ = static_cast<float>(b);
+}
+
+double Tracker::robust_scale(int n) {
+  // sigma = 1.4826 * median(|r - median(r)|), the paper's MAD estimate.
+  int m = 0;
+  for (int i = 0; i < n; ++i)
+    if (ph_sample_[i] != kInvalid) scratch_[m++] = ph_residual_[i];
+  if (m < 10) return ph_sigma_;
+  float* first = &scratch_[0];
+  std::nth_element(first, first + m / 2, first + m);
+  const float median = first[m / 2];
+  for (int i = 0; i < m; ++i) first[i] = std::fabs(first[i] - median);
+  std::nth_element(first, first + m / 2, first + m);
+  return std::max(kMinPhotometricSigma, kMadToSigma * first[m / 2]);
+}
+
+void Tracker::sample_geometric(const FixedVector<TrackPoint>& pts, const ImageF& idepth,
+                               const PinholeIntrinsics& k, const SE3& T_c_k) {
+  const Projector proj(T_c_k, k);
+  const bool inverse = opt_.residuals.geometric == GeometricMode::kInverseDepth;
+  const float sigma_rho = static_cast<float>(opt_.inverse_depth_sigma);
+  geo_residual_.clear();
+  geo_sigma_.clear();
+  for (const TrackPoint& p : pts) {
+    float u, v, z;
+    float residual = 0.f, sigma = 0.f;  // sigma 0 marks invalid
+    if (proj.project(p, &u, &v, &z) && idepth.contains(u, v, 1.f)) {
+      const int x0 = static_cast<int>(u), y0 = static_cast<int>(v);
+      const float* r0 = idepth.row(y0) + x0;
+      const float* r1 = r0 + idepth.width();
+      const float lo = std::min(std::min(r0[0], r0[1]), std::min(r1[0], r1[1]));
+      const float hi = std::max(std::max(r0[0], r0[1]), std::max(r1[0], r1[1]));
+      if (lo > 0.f && lo >= kDepthAgreement * hi) {
+        const float rho = sample_bilinear(idepth, u, v);
+        if (inverse) {
+          residual = 1.f / z - rho;
+          sigma = sigma_rho;
+        } else {
+          const float depth = 1.f / rho;
+          residual = z - depth;
+          sigma = sigma_rho * depth * depth;  // sigma_z = z^2 sigma_d / (f b)
+        }
+      }
+    }
+    (void)geo_residual_.push_back(residual);
+    (void)geo_sigma_.push_back(sigma);
+  }
+}
+
+Tracker::LevelCost Tracker::accumulate(const FixedVector<TrackPoint>& ph,
+                                       const FixedVector<TrackPoint>& geo) {
+  LevelCost out;
+  const GemanMcClure gm(opt_.robust_c);
+  NormalEquations ne_ph, ne_geo;
+  double cost_ph = 0.0, cost_geo = 0.0;
+  const double inv_sigma = 1.0 / ph_sigma_;
+  int ph_inliers = 0, geo_inliers = 0;
+  for (int i = 0; i < ph.size(); ++i) {
+    if (ph_sample_[i] == kInvalid) {
+      cost_ph += gm.saturated_cost();
+      continue;
+    }
+    const double x = ph_residual_[i] * inv_sigma;
+    cost_ph += gm.cost(x);
+    ne_ph.add(ph[i].J, inv_sigma, gm.weight(x), x);
+    ++out.valid;
+    if (std::fabs(x) < kInlierSigmas) ++ph_inliers;
+  }
+  for (int i = 0; i < geo.size(); ++i) {
+    if (geo_sigma_[i] == 0.f) {
+      cost_geo += gm.saturated_cost();
+      continue;
+    }
+    const double inv_s = 1.0 / geo_sigma_[i];
+    const double x = geo_residual_[i] * inv_s;
+    cost_geo += gm.cost(x);
+    ne_geo.add(geo[i].J, inv_s, gm.weight(x), x);
+    ++out.valid;
+    if (std::fabs(x) < kInlierSigmas) ++geo_inliers;
+  }
+  ne_ph.write(&out.H, &out.g, 1.0);
+  ne_geo.write(&out.H, &out.g, opt_.geometric_weight);
+  out.cost = cost_ph + opt_.geometric_weight * cost_geo;
+  out.total = ph.size() + geo.size();
+  // Overlap is the paper's keyframe criterion: the photometric points when there are any.
+  out.inliers = ph.size() > 0 ? ph_inliers : geo_inliers;
+  return out;
+}
+
+TrackResult Tracker::track(const Keyframe& kf, const FramePyramid& frame,
+                           const SE3& T_k_c_guess) {
+  TrackResult result;
+  SE3 T_c_k = T_k_c_guess.inverse();
+  gain_ = 1.f;
+  brightness_ = 0.f;
+  const bool use_geometric = frame.has_depth();
+  LevelCost finest;
+  for (int level = kPyramidLevels - 1; level >= 0; --level) {
+    const FixedVector<TrackPoint>& ph = kf.photometric[level];
+    const FixedVector<TrackPoint>& geo = use_geometric ? kf.geometric[level] : no_points_;
+    const PinholeIntrinsics& k = frame.intrinsics(level);
+    auto evaluate = [&](const SE3& T, bool new_scale) {
+      sample_photometric(ph, frame.gray(level), k, T);
+      estimate_gain_brightness(ph);
+      ph_residual_.clear();
+      for (int i = 0; i < ph.size(); ++i) {
+        (void)ph_residual_.push_back(ph_sample_[i] == kInvalid
+                                         ? 0.f
+                                         : gain_ * ph_sample_[i] + brightness_ - ph[i].ref);
+      }
+      if (new_scale) ph_sigma_ = static_cast<float>(robust_scale(ph.size()));
+      sample_geometric(geo, frame.inverse_depth(level), k, T);
+      return accumulate(ph, geo);
+    };
+    LevelCost current = evaluate(T_c_k, true);
+    for (int it = 0; it < opt_.max_iterations[level]; ++it) {
+      if (current.valid < 6) break;
+      Eigen::Matrix<double, 6, 6> H = current.H;
+      H.diagonal() *= 1.0 + 1e-6;  // guards a rank-deficient level without biasing the step
+      const Vector6d delta = H.ldlt().solve(-current.g);
+      if (!delta.allFinite()) break;
+      const SE3 T_new = T_c_k * SE3::exp(-delta);
+      const float gain = gain_, brightness = brightness_;
+      LevelCost next = evaluate(T_new, false);
+      ++result.iterations;
+      if (next.cost >= current.cost) {
+        gain_ = gain;
+        brightness_ = brightness;
+        break;
+      }
+      const double decrease = (current.cost - next.cost) / current.cost;
+      T_c_k = T_new;
+      current = next;
+      if (decrease < opt_.min_relative_decrease) break;
+    }
+    if (level == 0) finest = current;
+  }
+  result.T_k_c = T_c_k.inverse();
+  result.overlap = finest.total > 0 ? static_cast<double>(finest.inliers) /
+                                          (kf.photometric[0].size() > 0 ? kf.photometric[0].size()
+                                                                        : finest.total)
+                                    : 0.0;
+  result.photometric_sigma = ph_sigma_;
+  result.gain = gain_;
+  result.brightness = brightness_;
+  result.residuals_used = finest.valid;
+  result.information = finest.H;
+  // Too few residuals left to constrain six degrees of freedom reliably.
+  constexpr int kMinResiduals = 100;
+  result.state = finest.valid >= kMinResiduals ? TrackingState::kOk : TrackingState::kLost;
+  return result;
+}
+
+}  // namespace rgbdtam

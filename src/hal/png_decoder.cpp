@@ -1,0 +1,146 @@
+#include "rgbdtam/hal/png_decoder.hpp"
+
+#include <png.h>
+
+#include <csetjmp>
+#include <cstring>
+
+namespace rgbdtam {
+namespace {
+
+struct MemoryReader {
+  const uint8_t* data;
+  size_t size;
+  size_t pos;
+};
+
+struct ErrorSink {
+  char message[160];
+};
+
+void on_error(png_structp png, png_const_charp msg) {
+  auto* sink = static_cast<ErrorSink*>(png_get_error_ptr(png));
+  std::snprintf(sink->message, sizeof(sink->message), "%s", msg);
+  png_longjmp(png, 1);
+}
+
+void on_warning(png_structp, png_const_charp) {}
+
+void read_bytes(png_structp png, png_bytep out, size_t n) {
+  auto* r = static_cast<MemoryReader*>(png_get_io_ptr(png));
+  if (r->size - r->pos < n) png_error(png, "file is truncated");
+  std::memcpy(out, r->data + r->pos, n);
+  r->pos += n;
+}
+
+png_voidp arena_malloc(png_structp png, png_alloc_size_t n) {
+  return static_cast<PngDecoder*>(png_get_mem_ptr(png))->arena_alloc(n);
+}
+
+void arena_free(png_structp, png_voidp) {}  // the arena is reset before each image
+
+constexpr size_t kArenaFixedBytes = 96 * 1024;  // png/info structs, zlib state and window
+}  // namespace
+
+void PngDecoder::allocate(int max_width) {
+  max_width_ = max_width;
+  // libpng keeps two rows of up to 4 channels x 16 bits, plus its fixed state.
+  arena_size_ = kArenaFixedBytes + 4 * (static_cast<size_t>(max_width) * 8 + 64);
+  arena_.reset(new uint8_t[arena_size_]);
+  row_.reset(new uint8_t[static_cast<size_t>(max_width) * 8]);
+}
+
+void* PngDecoder::arena_alloc(size_t n) {
+  const size_t aligned = (n + 15) & ~static_cast<size_t>(15);
+  if (arena_size_ - arena_used_ < aligned) return nullptr;  // libpng reports out of memory
+  void* p = arena_.get() + arena_used_;
+  arena_used_ += aligned;
+  if (arena_used_ > high_water_) high_water_ = arena_used_;
+  return p;
+}
+
+Status PngDecoder::decode_gray8(const uint8_t* png, size_t size, int width, int height,
+                                uint8_t* out) {
+  return decode(png, size, width, height, 8, out);
+}
+
+Status PngDecoder::decode_gray16(const uint8_t* png, size_t size, int width, int height,
+                                 uint16_t* out) {
+  return decode(png, size, width, height, 16, out);
+}
+
+Status PngDecoder::decode(const uint8_t* data, size_t size, int width, int height,
+                          int bit_depth, void* out) {
+  if (size < 8 || png_sig_cmp(data, 0, 8) != 0) {
+    return Status::error(StatusCode::kCorrupt, "not a PNG file");
+  }
+  arena_used_ = 0;
+  ErrorSink sink{};
+  MemoryReader reader{data, size, 0};
+  png_structp png = png_create_read_struct_2(PNG_LIBPNG_VER_STRING, &sink, on_error, on_warning,
+                                             this, arena_malloc, arena_free);
+  if (png == nullptr) return Status::error(StatusCode::kOutOfRange, "PNG arena too small");
+  png_infop info = png_create_info_struct(png);
+  if (info == nullptr) return Status::error(StatusCode::kOutOfRange, "PNG arena too small");
+  if (setjmp(png_jmpbuf(png))) {
+    return Status::error(StatusCode::kCorrupt, "corrupt PNG: %s", sink.message);
+  }
+  png_set_read_fn(png, &reader, read_bytes);
+  png_read_info(png, info);
+  const int w = static_cast<int>(png_get_image_width(png, info));
+  const int h = static_cast<int>(png_get_image_height(png, info));
+  const int depth = png_get_bit_depth(png, info);
+  const int color = png_get_color_type(png, info);
+  if (w != width || h != height) {
+    png_destroy_read_struct(&png, &info, nullptr);
+    return Status::error(StatusCode::kInvalidArgument, "PNG is %dx%d, expected %dx%d", w, h,
+                         width, height);
+  }
+  if (png_get_interlace_type(png, info) != PNG_INTERLACE_NONE) {
+    png_destroy_read_struct(&png, &info, nullptr);
+    return Status::error(StatusCode::kInvalidArgument, "interlaced PNGs are not supported");
+  }
+  int channels = 1;
+  if (bit_depth == 16) {
+    if (color != PNG_COLOR_TYPE_GRAY || depth != 16) {
+      png_destroy_read_struct(&png, &info, nullptr);
+      return Status::error(StatusCode::kInvalidArgument,
+                           "depth PNG must be 16-bit single channel (got %d-bit, colour type %d)",
+                           depth, color);
+    }
+    png_set_swap(png);  // PNG is big-endian
+  } else {
+    if (color == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(png);
+    if (color == PNG_COLOR_TYPE_GRAY && depth < 8) png_set_expand_gray_1_2_4_to_8(png);
+    if (depth == 16) png_set_strip_16(png);
+    png_set_strip_alpha(png);
+    channels = (color & PNG_COLOR_MASK_COLOR) != 0 || color == PNG_COLOR_TYPE_PALETTE ? 3 : 1;
+  }
+  png_read_update_info(png, info);
+  if (png_get_rowbytes(png, info) > static_cast<size_t>(max_width_) * 8) {
+    png_destroy_read_struct(&png, &info, nullptr);
+    return Status::error(StatusCode::kOutOfRange, "PNG row larger than the row buffer");
+  }
+  for (int y = 0; y < h; ++y) {
+    if (bit_depth == 16) {
+      png_read_row(png, reinterpret_cast<png_bytep>(static_cast<uint16_t*>(out) + size_t(y) * w),
+                   nullptr);
+      continue;
+    }
+    uint8_t* dst = static_cast<uint8_t*>(out) + static_cast<size_t>(y) * w;
+    if (channels == 1) {
+      png_read_row(png, dst, nullptr);
+      continue;
+    }
+    png_read_row(png, row_.get(), nullptr);
+    const uint8_t* rgb = row_.get();
+    for (int x = 0; x < w; ++x, rgb += 3) {
+      // ITU-R BT.601 luma, rounded: the weights used for the benchmark's grey images.
+      dst[x] = static_cast<uint8_t>((299 * rgb[0] + 587 * rgb[1] + 114 * rgb[2] + 500) / 1000);
+    }
+  }
+  png_destroy_read_struct(&png, &info, nullptr);
+  return Status::ok();
+}
+
+}  // namespace rgbdtam

@@ -1,0 +1,155 @@
+#include "rgbdtam/hal/tum_replay_source.hpp"
+
+#include <algorithm>
+#include <cstdio>
+#include <cstring>
+
+#include "rgbdtam/hal/file.hpp"
+#include "rgbdtam/hal/tum_timestamp.hpp"
+
+namespace rgbdtam {
+namespace {
+constexpr size_t kMaxListBytes = 64u << 20;
+
+const char* skip_blanks(const char* s) {
+  while (*s == ' ' || *s == '\t' || *s == ',') ++s;
+  return s;
+}
+}  // namespace
+
+Status parse_tum_list(const char* text, const char* source, TumList* out) {
+  int lines = 1;
+  for (const char* c = text; *c != '\0'; ++c) lines += *c == '\n' ? 1 : 0;
+  out->entries.reset(new TumListEntry[static_cast<size_t>(lines)]);
+  out->size = 0;
+  out->bad_lines = 0;
+  int line_no = 0;
+  for (const char* line = text; *line != '\0';) {
+    const char* nl = std::strchr(line, '\n');
+    const char* end = nl != nullptr ? nl : line + std::strlen(line);
+    ++line_no;
+    const char* s = skip_blanks(line);
+    if (s < end && *s != '#' && *s != '\r') {
+      TumListEntry& e = out->entries[out->size];
+      const char* after = parse_seconds_ns(s, &e.timestamp_ns);
+      const char* name = after != nullptr ? skip_blanks(after) : nullptr;
+      const char* name_end = name;
+      while (name_end != nullptr && name_end < end && *name_end != ' ' && *name_end != '\t' &&
+             *name_end != '\r' && *name_end != ',') {
+        ++name_end;
+      }
+      const size_t len = name != nullptr ? static_cast<size_t>(name_end - name) : 0;
+      if (after == nullptr || (*after != ' ' && *after != '\t' && *after != ',') || len == 0 ||
+          len >= sizeof(e.path)) {
+        if (out->bad_lines++ == 0) {
+          out->first_problem = Status::error(StatusCode::kCorrupt,
+                                             "%s:%d: expected 'timestamp filename'", source,
+                                             line_no);
+        }
+      } else {
+        std::memcpy(e.path, name, len);
+        e.path[len] = '\0';
+        ++out->size;
+      }
+    }
+    line = nl != nullptr ? nl + 1 : end;
+  }
+  std::stable_sort(out->entries.get(), out->entries.get() + out->size,
+                   [](const TumListEntry& a, const TumListEntry& b) {
+                     return a.timestamp_ns < b.timestamp_ns;
+                   });
+  if (out->size == 0) {
+    return Status::error(StatusCode::kCorrupt, "%s: no 'timestamp filename' entries", source);
+  }
+  return Status::ok();
+}
+
+Status TumReplaySource::open(const char* folder, int width, int height,
+                             int64_t max_rgb_depth_dt_ns) {
+  if (std::strlen(folder) >= sizeof(folder_) - 200) {
+    return Status::error(StatusCode::kInvalidArgument, "sequence path too long: %s", folder);
+  }
+  std::snprintf(folder_, sizeof(folder_), "%s", folder);
+  width_ = width;
+  height_ = height;
+  for (int which = 0; which < 2; ++which) {
+    char path[768];
+    std::snprintf(path, sizeof(path), "%s/%s", folder_, which == 0 ? "rgb.txt" : "depth.txt");
+    char* text = nullptr;
+    RGBDTAM_RETURN_IF_ERROR(read_text_file(path, kMaxListBytes, &text));
+    const Status s = parse_tum_list(text, path, which == 0 ? &rgb_ : &depth_);
+    delete[] text;
+    RGBDTAM_RETURN_IF_ERROR(s);
+  }
+  // Nearest depth for each colour frame (both lists are sorted).
+  depth_match_.reset(new int[static_cast<size_t>(rgb_.size)]);
+  int j = 0;
+  for (int i = 0; i < rgb_.size; ++i) {
+    const int64_t t = rgb_.entries[i].timestamp_ns;
+    while (j + 1 < depth_.size &&
+           std::llabs(depth_.entries[j + 1].timestamp_ns - t) <=
+               std::llabs(depth_.entries[j].timestamp_ns - t)) {
+      ++j;
+    }
+    const bool close = std::llabs(depth_.entries[j].timestamp_ns - t) < max_rgb_depth_dt_ns;
+    depth_match_[i] = close ? j : -1;
+  }
+  // A PNG is at most its raw size plus zlib's and the chunks' overhead.
+  file_capacity_ = static_cast<size_t>(width) * height * 4 + (1u << 16);
+  file_buf_.reset(new uint8_t[file_capacity_]);
+  png_.allocate(width);
+  gray_.allocate(width, height);
+  depth_img_.allocate(width, height);
+  cursor_ = 0;
+  return Status::ok();
+}
+
+Status TumReplaySource::load(const TumListEntry& e, bool depth, void* out) {
+  char path[768];
+  std::snprintf(path, sizeof(path), "%s/%s", folder_, e.path);
+  size_t size = 0;
+  RGBDTAM_RETURN_IF_ERROR(read_file(path, file_buf_.get(), file_capacity_, &size));
+  const Status s = depth ? png_.decode_gray16(file_buf_.get(), size, width_, height_,
+                                              static_cast<uint16_t*>(out))
+                         : png_.decode_gray8(file_buf_.get(), size, width_, height_,
+                                             static_cast<uint8_t*>(out));
+  if (!s.is_ok()) return Status::error(s.code(), "%s: %s", path, s.message());
+  return Status::ok();
+}
+
+Status TumReplaySource::next(SensorFrame* frame, Status* warning) {
+  *warning = Status::ok();
+  if (cursor_ >= rgb_.size) return Status::error(StatusCode::kEndOfStream, "end of sequence");
+  const int i = cursor_++;
+  const TumListEntry& rgb = rgb_.entries[i];
+  const Status s = load(rgb, false, gray_.data());
+  if (!s.is_ok()) {
+    ++counters_.skipped;
+    return s;
+  }
+  frame->sequence = static_cast<uint32_t>(i);
+  frame->timestamp_ns = rgb.timestamp_ns;
+  frame->gray = gray_.data();
+  frame->width_px = width_;
+  frame->height_px = height_;
+  frame->depth = nullptr;
+  frame->depth_timestamp_ns = 0;
+  const int d = depth_match_[i];
+  if (d < 0) {
+    *warning = Status::error(StatusCode::kNotFound, "%s/%s: no depth frame within the limit",
+                             folder_, rgb.path);
+  } else {
+    const Status ds = load(depth_.entries[d], true, depth_img_.data());
+    if (ds.is_ok()) {
+      frame->depth = depth_img_.data();
+      frame->depth_timestamp_ns = depth_.entries[d].timestamp_ns;
+    } else {
+      *warning = ds;
+    }
+  }
+  if (frame->depth == nullptr) ++counters_.without_depth;
+  ++counters_.delivered;
+  return Status::ok();
+}
+
+}  // namespace rgbdtam

@@ -1,0 +1,99 @@
+#include "rgbdtam/hal/tum_trajectory.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+
+#include "rgbdtam/hal/file.hpp"
+#include "rgbdtam/hal/tum_timestamp.hpp"
+#include "rgbdtam/hal/tum_replay_source.hpp"
+
+namespace rgbdtam {
+namespace {
+constexpr size_t kMaxTrajectoryBytes = 256u << 20;
+}
+
+Status read_tum_trajectory(const char* path, std::vector<StampedPose>* out, int* bad_lines) {
+  char* text = nullptr;
+  RGBDTAM_RETURN_IF_ERROR(read_text_file(path, kMaxTrajectoryBytes, &text));
+  out->clear();
+  *bad_lines = 0;
+  for (char* line = text; *line != '\0';) {
+    char* nl = std::strchr(line, '\n');
+    if (nl != nullptr) *nl = '\0';
+    for (char* c = line; *c != '\0'; ++c)
+      if (*c == ',' || *c == '\t') *c = ' ';
+    const char* s = line;
+    while (*s == ' ') ++s;
+    if (*s != '\0' && *s != '#' && *s != '\r') {
+      double v[8];
+      int n = 0;
+      char* cur = const_cast<char*>(s);
+      for (; n < 8; ++n) {
+        char* end = nullptr;
+        v[n] = std::strtod(cur, &end);
+        if (end == cur || !std::isfinite(v[n])) break;
+        cur = end;
+      }
+      const Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);
+      if (n < 8 || q.norm() < 1e-9) {
+        ++*bad_lines;  // evaluate_rpe.py skips zero quaternions as well
+      } else {
+        out->push_back({v[0], SE3(q, Vector3d(v[1], v[2], v[3]))});
+      }
+    }
+    line = nl != nullptr ? nl + 1 : line + std::strlen(line);
+  }
+  delete[] text;
+  std::stable_sort(out->begin(), out->end(),
+                   [](const StampedPose& a, const StampedPose& b) { return a.stamp_s < b.stamp_s; });
+  if (out->empty()) return Status::error(StatusCode::kCorrupt, "%s: no poses", path);
+  return Status::ok();
+}
+
+Status read_tum_stamps(const char* path, std::vector<double>* out) {
+  char* text = nullptr;
+  RGBDTAM_RETURN_IF_ERROR(read_text_file(path, kMaxTrajectoryBytes, &text));
+  TumList list;
+  const Status s = parse_tum_list(text, path, &list);
+  delete[] text;
+  RGBDTAM_RETURN_IF_ERROR(s);
+  out->clear();
+  for (int i = 0; i < list.size; ++i) out->push_back(list.entries[i].timestamp_ns * 1e-9);
+  return Status::ok();
+}
+
+TrajectoryWriter::~TrajectoryWriter() { (void)close(); }
+
+Status TrajectoryWriter::open(const char* path) {
+  file_ = std::fopen(path, "w");
+  if (file_ == nullptr) {
+    return Status::error(StatusCode::kIoError, "%s: %s", path, std::strerror(errno));
+  }
+  std::setvbuf(file_, buffer_, _IOFBF, sizeof(buffer_));
+  std::fputs("# timestamp tx ty tz qx qy qz qw (camera to world, every tracked frame)\n", file_);
+  return Status::ok();
+}
+
+Status TrajectoryWriter::write(const PoseEstimate& pose) {
+  if (file_ == nullptr || (pose.flags & kPoseValid) == 0) return Status::ok();
+  char stamp[32];
+  format_seconds(pose.timestamp_ns, stamp, sizeof(stamp));
+  const Vector3d& t = pose.T_w_c.translation();
+  const Eigen::Quaterniond& q = pose.T_w_c.quaternion();
+  if (std::fprintf(file_, "%s %.7f %.7f %.7f %.7f %.7f %.7f %.7f\n", stamp, t.x(), t.y(), t.z(),
+                   q.x(), q.y(), q.z(), q.w()) < 0) {
+    return Status::error(StatusCode::kIoError, "trajectory write failed");
+  }
+  return Status::ok();
+}
+
+Status TrajectoryWriter::close() {
+  if (file_ == nullptr) return Status::ok();
+  const int rc = std::fclose(file_);
+  file_ = nullptr;
+  return rc == 0 ? Status::ok() : Status::error(StatusCode::kIoError, "trajectory close failed");
+}
+
+}  // namespace rgbdtam

@@ -1,0 +1,29 @@
+#include "rgbdtam/runtime/keyframe_pool.hpp"
+
+namespace rgbdtam {
+
+void KeyframePool::allocate(int capacity, const KeyframeBuilder& builder) {
+  RGBDTAM_ASSERT(capacity >= 2, "a keyframe pool needs room for the reference and a new one");
+  capacity_ = capacity;
+  slots_.reset(new Keyframe[static_cast<size_t>(capacity)]);
+  age_.reset(new uint64_t[static_cast<size_t>(capacity)]());
+  for (int i = 0; i < capacity; ++i) builder.allocate_keyframe(&slots_[i]);
+}
+
+Keyframe* KeyframePool::acquire(const Keyframe* keep) {
+  int slot;
+  if (used_ < capacity_) {
+    slot = used_++;
+  } else {
+    slot = -1;
+    for (int i = 0; i < capacity_; ++i) {
+      if (&slots_[i] == keep) continue;
+      if (slot < 0 || age_[i] < age_[slot]) slot = i;
+    }
+    ++recycled_;
+  }
+  age_[slot] = ++clock_;
+  return &slots_[slot];
+}
+
+}  // namespace rgbdtam
