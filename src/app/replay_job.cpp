@@ -15,7 +15,8 @@ Status ReplayJob::init(const ReplayOptions& options) {
   options_ = options;
   const Params& p = options.params;
   RGBDTAM_RETURN_IF_ERROR(source_.open(options.sequence, p.camera.width_px, p.camera.height_px,
-                                       p.sensor.max_rgb_depth_dt_ns));
+                                       p.sensor.max_rgb_depth_dt_ns,
+                                       p.sensor.depth_time_offset_ns));
   if (source_.rgb_list().bad_lines > 0) {
     std::fprintf(stderr, "warning: %d unreadable lines in rgb.txt, skipped; first: %s\n",
                  source_.rgb_list().bad_lines, source_.rgb_list().first_problem.message());
@@ -84,7 +85,7 @@ void ReplayJob::print_summary() const {
               source_.frame_count(), residuals);
   std::printf("frames: read %u, skipped %u, without depth %u; tracked %u, lost %u, resets %u\n",
               rc.delivered, rc.skipped, rc.without_depth, c.tracked, c.lost, c.resets);
-  std::printf("keyframes: %u created, pool %d of %d, %d recycled\n", c.keyframes,
+  std::printf("keyframes: %u created, %u reused, pool %d of %d, %d recycled\n", c.keyframes, c.reused,
               pipeline_.keyframes().size(), pipeline_.keyframes().capacity(),
               pipeline_.keyframes().recycled());
   std::printf("tracking ms/frame: median %.2f, p95 %.2f, max %.2f\n",

@@ -114,26 +114,29 @@ void Tracker::sample_photometric(const FixedVector<TrackPoint>& pts, const Image
 
 void Tracker::estimate_gain_brightness(const FixedVector<TrackPoint>& pts) {
   if (!opt_.gain_brightness) return;
-  // Least squares a*I_cur + b = I_kf over points whose intensities roughly agree.
-  double s_cc = 0, s_c = 0, s_ck = 0, s_k = 0, n = 0;
+  // Moment matching, a = std(I_kf) / std(I_cur), b = mean(I_kf) - a mean(I_cur): a least-squares
+  // fit of I_kf on I_cur would be biased towards a = 0 (regression dilution), because edge
+  // pixels make I_cur noisy under any misalignment.
+  double n = 0, s_c = 0, s_k = 0, s_cc = 0, s_kk = 0;
   for (int i = 0; i < pts.size(); ++i) {
     const float c = ph_sample_[i];
     if (c == kInvalid) continue;
     const float kf = pts[i].ref;
     if (std::fabs(gain_ * c + brightness_ - kf) > kGainInlier) continue;
-    s_cc += c * c;
-    s_c += c;
-    s_ck += c * kf;
-    s_k += kf;
     n += 1;
+    s_c += c;
+    s_k += kf;
+    s_cc += static_cast<double>(c) * c;
+    s_kk += static_cast<double>(kf) * kf;
   }
-  const double det = s_cc * n - s_c * s_c;
-  if (n < 50 || det <= 1e-9 * n * n) return;
-  const double a = (s_ck * n - s_c * s_k) / det;
-  const double b = (s_cc * s_k - s_c * s_ck) / det;
+  if (n < 50) return;
+  const double mean_c = s_c / n, mean_k = s_k / n;
+  const double var_c = s_cc / n - mean_c * mean_c, var_k = s_kk / n - mean_k * mean_k;
+  if (var_c <= 1e-8 || var_k <= 1e-8) return;
+  const double a = std::sqrt(var_k / var_c);
   if (a < 0.5 || a > 2.0) return;  // an implausible gain means a bad alignment, not light
   gain_ = static_cast<float>(a);
-  brightness_ = static_cast<float>(b);
+  brightness_ = static_cast<float>(mean_k - a * mean_c);
 }
 
 double Tracker::robust_scale(int n) {

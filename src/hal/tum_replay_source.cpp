@@ -65,7 +65,7 @@ Status parse_tum_list(const char* text, const char* source, TumList* out) {
 }
 
 Status TumReplaySource::open(const char* folder, int width, int height,
-                             int64_t max_rgb_depth_dt_ns) {
+                             int64_t max_rgb_depth_dt_ns, int64_t depth_time_offset_ns) {
   if (std::strlen(folder) >= sizeof(folder_) - 200) {
     return Status::error(StatusCode::kInvalidArgument, "sequence path too long: %s", folder);
   }
@@ -85,7 +85,7 @@ Status TumReplaySource::open(const char* folder, int width, int height,
   depth_match_.reset(new int[static_cast<size_t>(rgb_.size)]);
   int j = 0;
   for (int i = 0; i < rgb_.size; ++i) {
-    const int64_t t = rgb_.entries[i].timestamp_ns;
+    const int64_t t = rgb_.entries[i].timestamp_ns + depth_time_offset_ns;
     while (j + 1 < depth_.size &&
            std::llabs(depth_.entries[j + 1].timestamp_ns - t) <=
                std::llabs(depth_.entries[j].timestamp_ns - t)) {

@@ -43,6 +43,7 @@ const ParamSpec kSpecs[] = {
     {"depth.focal", ParamType::kReal, 1, 1e5, "px", "IR camera focal length f", RGBDTAM_FIELD(sensor.depth_focal_px), false},
     {"depth.disparity_sigma", ParamType::kReal, 1e-4, 10, "px", "disparity noise sigma_d", RGBDTAM_FIELD(sensor.disparity_sigma_px), false},
     {"depth.max_rgb_dt", ParamType::kNanoseconds, 0, 1e9, "ns", "largest colour-depth time difference", RGBDTAM_FIELD(sensor.max_rgb_depth_dt_ns), false},
+    {"depth.time_offset", ParamType::kNanoseconds, -1e8, 1e8, "ns", "pair colour at t with depth stamped nearest t + offset", RGBDTAM_FIELD(sensor.depth_time_offset_ns), false},
     {"tracker.residuals", ParamType::kResiduals, 0, 0, "", "PS, PD, GIDS, GIDD, GIDD*, PS+GIDD, PS+GDD, ...", RGBDTAM_FIELD(tracker.residuals), false},
     {"tracker.photometric_points", ParamType::kInt, 10, 1e6, "", "photometric points at the finest level (x1/3 per level)", RGBDTAM_FIELD(tracker.photometric_points_finest), false},
     {"tracker.gradient_top_fraction", ParamType::kFloat, 0.01, 1, "", "fraction of strongest gradients eligible as points", RGBDTAM_FIELD(tracker.gradient_top_fraction), false},
@@ -59,6 +60,7 @@ const ParamSpec kSpecs[] = {
     {"tracker.gain_brightness", ParamType::kBool, 0, 1, "", "estimate gain and brightness", RGBDTAM_FIELD(tracker.gain_brightness), false},
     {"tracker.motion_model", ParamType::kBool, 0, 1, "", "constant-velocity initial guess", RGBDTAM_FIELD(tracker.motion_model), false},
     {"map.keyframe_pool", ParamType::kInt, 2, 4096, "", "keyframes kept; when full the oldest non-reference one is recycled", RGBDTAM_FIELD(keyframe_pool_size), false},
+    {"map.reuse_candidates", ParamType::kInt, 0, 16, "", "nearest earlier keyframes tried before creating a new one (0: no map reuse)", RGBDTAM_FIELD(reuse_candidates), false},
     {"tracker.lost_frames_before_reset", ParamType::kInt, 1, 100000, "frames", "consecutive lost frames before a new keyframe restarts tracking", RGBDTAM_FIELD(lost_frames_before_reset), false},
 };
 #undef RGBDTAM_FIELD

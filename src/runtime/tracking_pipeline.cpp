@@ -23,6 +23,55 @@ SE3 TrackingPipeline::predict_pose() const {
   return T_w_last_;
 }
 
+bool TrackingPipeline::reuse_keyframe(const SE3& T_w_c, PoseEstimate* out) {
+  // Nearest earlier keyframes by camera distance, a radian of rotation counted as 0.3 m.
+  constexpr int kMaxCandidates = 16;
+  constexpr double kMetresPerRadian = 0.3;
+  Keyframe* candidates[kMaxCandidates];
+  double scores[kMaxCandidates];
+  int count = 0;
+  const int wanted = params_.reuse_candidates < kMaxCandidates ? params_.reuse_candidates
+                                                               : kMaxCandidates;
+  for (int i = 0; i < pool_.size(); ++i) {
+    Keyframe* kf = &pool_.at(i);
+    if (kf == reference_) continue;
+    const SE3 d = kf->T_w_k.inverse() * T_w_c;
+    const double score = d.translation().norm() + kMetresPerRadian * so3_log(d.quaternion()).norm();
+    int pos = count < wanted ? count++ : wanted;
+    while (pos > 0 && scores[pos - 1] > score) {
+      if (pos < wanted) {
+        candidates[pos] = candidates[pos - 1];
+        scores[pos] = scores[pos - 1];
+      }
+      --pos;
+    }
+    if (pos < wanted) {
+      candidates[pos] = kf;
+      scores[pos] = score;
+    }
+  }
+  Keyframe* best = nullptr;
+  TrackResult best_result;
+  for (int i = 0; i < count; ++i) {
+    const TrackResult r = tracker_.track(*candidates[i], pyramid_, candidates[i]->T_w_k.inverse() * T_w_c);
+    if (r.state == TrackingState::kOk && r.overlap >= params_.tracker.keyframe_overlap &&
+        (best == nullptr || r.overlap > best_result.overlap)) {
+      best = candidates[i];
+      best_result = r;
+    }
+  }
+  if (best == nullptr) return false;
+  reference_ = best;
+  out->T_w_c = best->T_w_k * best_result.T_k_c;
+  out->keyframe_id = best->id;
+  out->overlap = static_cast<float>(best_result.overlap);
+  out->information = best_result.information;
+  out->flags |= kKeyframeReused;
+  T_w_last_ = out->T_w_c;
+  ++counters_.reused;
+  return true;
+}
+
 void TrackingPipeline::start_keyframe(const SensorFrame& frame, const SE3& T_w_c,
                                       PoseEstimate* out) {
   Keyframe* kf = pool_.acquire(reference_);
@@ -87,7 +136,8 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
     T_w_before_last_ = T_w_last_;
     T_w_last_ = out.T_w_c;
     valid_history_ = valid_history_ < 2 ? valid_history_ + 1 : 2;
-    if (r.overlap < params_.tracker.keyframe_overlap && pyramid_.has_depth()) {
+    if (r.overlap < params_.tracker.keyframe_overlap && !reuse_keyframe(out.T_w_c, &out) &&
+        pyramid_.has_depth()) {
       start_keyframe(frame, out.T_w_c, &out);
     }
   } else {

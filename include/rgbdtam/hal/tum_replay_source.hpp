@@ -35,7 +35,8 @@ struct ReplayCounters {
 
 class TumReplaySource : public SensorSource {
  public:
-  Status open(const char* folder, int width, int height, int64_t max_rgb_depth_dt_ns);
+  Status open(const char* folder, int width, int height, int64_t max_rgb_depth_dt_ns,
+              int64_t depth_time_offset_ns);
   Status next(SensorFrame* frame, Status* warning) override;
 
   int frame_count() const { return rgb_.size; }

@@ -12,6 +12,7 @@ class KeyframePool {
   // Returns a slot for a new keyframe; never the one at `keep`.
   Keyframe* acquire(const Keyframe* keep);
   int size() const { return used_; }
+  Keyframe& at(int i) { return slots_[i]; }
   int capacity() const { return capacity_; }
   int recycled() const { return recycled_; }
 

@@ -29,6 +29,7 @@ enum PoseFlags : uint32_t {
   kLost = 1u << 3,           // tracking failed on this frame
   kReset = 1u << 4,          // estimate restarted (jump); see reset_counter
   kNotInitialised = 1u << 5, // no keyframe yet (waiting for a frame with depth)
+  kKeyframeReused = 1u << 6, // an earlier keyframe became the reference again (map reuse)
 };
 
 // Pipeline -> trajectory writer, link. One per input frame.

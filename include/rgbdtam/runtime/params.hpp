@@ -19,6 +19,7 @@ struct SensorModel {
   double depth_focal_px = 580.0;     // focal length of the IR camera
   double disparity_sigma_px = 0.1;   // disparity noise of the structured-light matcher
   int64_t max_rgb_depth_dt_ns = 20'000'000;  // pair colour and depth within 20 ms
+  int64_t depth_time_offset_ns = 0;  // pair colour at t with the depth stamped nearest t + offset
   // The paper's eq. for structured light: sigma_rho = sigma_d / (f b), constant in 1/m.
   double inverse_depth_sigma() const { return disparity_sigma_px / (depth_focal_px * baseline_m); }
 };
@@ -28,7 +29,8 @@ struct Params {
   RadTanDistortion distortion;
   SensorModel sensor;
   TrackerOptions tracker;
-  int keyframe_pool_size = 16;
+  int keyframe_pool_size = 32;
+  int reuse_candidates = 2;  // nearest earlier keyframes tried before creating a new one
   int lost_frames_before_reset = 10;
 };
 

@@ -16,6 +16,7 @@ struct TrackingCounters {
   uint32_t without_depth = 0;
   uint32_t keyframes = 0;
   uint32_t resets = 0;
+  uint32_t reused = 0;  // keyframe switches that reused an earlier keyframe
 };
 
 class TrackingPipeline {
@@ -30,6 +31,7 @@ class TrackingPipeline {
  private:
   void start_keyframe(const SensorFrame& frame, const SE3& T_w_c, PoseEstimate* out);
   SE3 predict_pose() const;
+  bool reuse_keyframe(const SE3& T_w_c, PoseEstimate* out);
 
   Params params_;
   Undistorter undistorter_;

@@ -1,0 +1,80 @@
+// The tracker on a synthetic sequence with exact ground truth must be sub-millimetre.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "rgbdtam/runtime/tracking_pipeline.hpp"
+#include "synthetic_scene.hpp"
+
+namespace rgbdtam {
+namespace {
+
+Params synthetic_params(const testing::SyntheticScene& scene, const char* residuals) {
+  Params p;
+  p.camera = scene.camera;
+  p.distortion = RadTanDistortion();
+  p.sensor.depth_factor = scene.depth_factor;
+  p.sensor.depth_range.max_m = 10.0;
+  EXPECT_TRUE(ResidualConfig::parse(residuals, &p.tracker.residuals));
+  if (getenv("NOMM")) p.tracker.motion_model = false;
+  return p;
+}
+
+struct PathError {
+  double max_translation_m = 0;
+  double max_rotation_rad = 0;
+  int tracked = 0;
+  uint32_t keyframes = 0;
+};
+
+PathError track_synthetic(const char* residuals, int frames, double fps) {
+  testing::SyntheticScene scene;
+  TrackingPipeline pipeline;
+  EXPECT_TRUE(pipeline.init(synthetic_params(scene, residuals)).is_ok());
+  const SE3 T_w0 = testing::SyntheticScene::pose_at(0.0);
+  PathError err;
+  for (int i = 0; i < frames; ++i) {
+    const double t = i / fps;
+    const SE3 T_w_c = testing::SyntheticScene::pose_at(t);
+    const testing::SyntheticFrame f = scene.render(T_w_c);
+    SensorFrame frame;
+    frame.sequence = static_cast<uint32_t>(i);
+    frame.timestamp_ns = static_cast<int64_t>(t * 1e9);
+    frame.gray = f.gray.data();
+    frame.depth = f.depth.data();
+    frame.width_px = scene.camera.width_px;
+    frame.height_px = scene.camera.height_px;
+    const PoseEstimate pose = pipeline.process(frame);
+    if ((pose.flags & kPoseValid) == 0) continue;
+    ++err.tracked;
+    const SE3 truth = T_w0.inverse() * T_w_c;  // world = first camera
+    const SE3 diff = truth.inverse() * pose.T_w_c;
+    err.max_translation_m = std::max(err.max_translation_m, diff.translation().norm());
+    err.max_rotation_rad = std::max(err.max_rotation_rad, so3_log(diff.quaternion()).norm());
+  }
+  err.keyframes = pipeline.counters().keyframes;
+  return err;
+}
+
+TEST(SyntheticTracking, PaperConfigurationIsSubMillimetre) {
+  const PathError e = track_synthetic("PS+GIDD", 40, 10.0);
+  EXPECT_EQ(e.tracked, 40);
+  EXPECT_GT(e.keyframes, 1u) << "the path should cross keyframe boundaries";
+  EXPECT_LT(e.max_translation_m, 1e-3);
+  EXPECT_LT(e.max_rotation_rad, 1e-3);
+  std::printf("PS+GIDD: max error %.3f mm, %.4f deg, %u keyframes\n", e.max_translation_m * 1e3,
+              e.max_rotation_rad * 180 / M_PI, e.keyframes);
+}
+
+TEST(SyntheticTracking, PhotometricOnlyAndGeometricOnlyBothFollow) {
+  for (const char* config : {"PS", "GIDD"}) {
+    const PathError e = track_synthetic(config, 20, 10.0);
+    EXPECT_EQ(e.tracked, 20) << config;
+    EXPECT_LT(e.max_translation_m, 2e-3) << config;
+    std::printf("%s: max error %.3f mm, %.4f deg\n", config, e.max_translation_m * 1e3,
+                e.max_rotation_rad * 180 / M_PI);
+  }
+}
+
+}  // namespace
+}  // namespace rgbdtam
