@@ -175,8 +175,10 @@ Coverage evaluate_coverage(const std::vector<double>& frame_stamps,
   const std::vector<double> gt_stamps = stamps_of(gt);
   const std::vector<double> est_stamps = stamps_of(est);
   auto has_near = [](const std::vector<double>& sorted, double t) {
-    auto it = std::lower_bound(sorted.begin(), sorted.end(), t - 0.02);
-    return it != sorted.end() && std::fabs(*it - t) < 0.02;
+    const auto it = std::lower_bound(sorted.begin(), sorted.end(), t);
+    const bool after = it != sorted.end() && std::fabs(*it - t) < 0.02;
+    const bool before = it != sorted.begin() && std::fabs(*(it - 1) - t) < 0.02;
+    return after || before;
   };
   for (double t : frame_stamps) {
     if (!has_near(gt_stamps, t)) continue;

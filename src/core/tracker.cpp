@@ -14,6 +14,9 @@ constexpr float kMinPhotometricSigma = 1.f / 255.f;
 constexpr float kGainInlier = 0.2f;   // |I_cur - I_kf| below which a point informs gain/brightness
 constexpr float kInlierSigmas = 3.f;  // overlap counts points within 3 standard deviations
 constexpr float kDepthAgreement = 0.9f;
+constexpr int kMinScaleSamples = 10;
+constexpr double kInitialDamping = 1e-3;  // Marquardt factor on diag(H) after a rejected step
+constexpr double kMaxDamping = 1e2;
 
 struct Projector {
   float r[9], t[3];
@@ -97,7 +100,7 @@ void Tracker::allocate(const Keyframe& model, const TrackerOptions& opt) {
   ph_residual_.reserve_once(std::max(ph, 1));
   geo_residual_.reserve_once(std::max(geo, 1));
   geo_sigma_.reserve_once(std::max(geo, 1));
-  scratch_.reserve_once(std::max(ph, 1));
+  scratch_.reserve_once(std::max(std::max(ph, geo), 1));
 }
 
 void Tracker::sample_photometric(const FixedVector<TrackPoint>& pts, const ImageF& img,
@@ -139,18 +142,28 @@ void Tracker::estimate_gain_brightness(const FixedVector<TrackPoint>& pts) {
   brightness_ = static_cast<float>(mean_k - a * mean_c);
 }
 
-double Tracker::robust_scale(int n) {
-  // sigma = 1.4826 * median(|r - median(r)|), the paper's MAD estimate.
-  int m = 0;
-  for (int i = 0; i < n; ++i)
-    if (ph_sample_[i] != kInvalid) scratch_[m++] = ph_residual_[i];
-  if (m < 10) return ph_sigma_;
+float Tracker::mad_sigma(int m) {
+  // sigma = 1.4826 * median(|r - median(r)|) over scratch_[0, m), the paper's MAD estimate.
   float* first = &scratch_[0];
   std::nth_element(first, first + m / 2, first + m);
   const float median = first[m / 2];
   for (int i = 0; i < m; ++i) first[i] = std::fabs(first[i] - median);
   std::nth_element(first, first + m / 2, first + m);
-  return std::max(kMinPhotometricSigma, kMadToSigma * first[m / 2]);
+  return kMadToSigma * first[m / 2];
+}
+
+void Tracker::update_scales(int n_ph, int n_geo) {
+  int m = 0;
+  for (int i = 0; i < n_ph; ++i)
+    if (ph_sample_[i] != kInvalid) scratch_[m++] = ph_residual_[i];
+  if (m >= kMinScaleSamples) ph_sigma_ = std::max(kMinPhotometricSigma, mad_sigma(m));
+  // The geometric residuals are in sensor standard deviations already; far from alignment
+  // their spread is wider than the sensor's, and the kernel widens with it so that the
+  // misaligned parts of the scene still pull.
+  m = 0;
+  for (int i = 0; i < n_geo; ++i)
+    if (geo_sigma_[i] != 0.f) scratch_[m++] = geo_residual_[i] / geo_sigma_[i];
+  geo_scale_ = m >= kMinScaleSamples ? std::max(1.f, mad_sigma(m)) : 1.f;
 }
 
 void Tracker::sample_geometric(const FixedVector<TrackPoint>& pts, const ImageF& idepth,
@@ -210,7 +223,7 @@ Tracker::LevelCost Tracker::accumulate(const FixedVector<TrackPoint>& ph,
       cost_geo += gm.saturated_cost();
       continue;
     }
-    const double inv_s = 1.0 / geo_sigma_[i];
+    const double inv_s = 1.0 / (geo_sigma_[i] * geo_scale_);
     const double x = geo_residual_[i] * inv_s;
     cost_geo += gm.cost(x);
     ne_geo.add(geo[i].J, inv_s, gm.weight(x), x);
@@ -247,15 +260,19 @@ TrackResult Tracker::track(const Keyframe& kf, const FramePyramid& frame,
                                          ? 0.f
                                          : gain_ * ph_sample_[i] + brightness_ - ph[i].ref);
       }
-      if (new_scale) ph_sigma_ = static_cast<float>(robust_scale(ph.size()));
       sample_geometric(geo, frame.inverse_depth(level), k, T);
+      if (new_scale) update_scales(ph.size(), geo.size());
       return accumulate(ph, geo);
     };
     LevelCost current = evaluate(T_c_k, true);
+    // Gauss-Newton with Marquardt damping: a step that raises the cost is retried shorter
+    // instead of ending the level, since the keyframe-side Jacobians are approximate far
+    // from the keyframe.
+    double damping = 0.0;
     for (int it = 0; it < opt_.max_iterations[level]; ++it) {
       if (current.valid < 6) break;
       Eigen::Matrix<double, 6, 6> H = current.H;
-      H.diagonal() *= 1.0 + 1e-6;  // guards a rank-deficient level without biasing the step
+      H.diagonal() *= 1.0 + 1e-6 + damping;
       const Vector6d delta = H.ldlt().solve(-current.g);
       if (!delta.allFinite()) break;
       const SE3 T_new = T_c_k * SE3::exp(-delta);
@@ -265,8 +282,11 @@ TrackResult Tracker::track(const Keyframe& kf, const FramePyramid& frame,
       if (next.cost >= current.cost) {
         gain_ = gain;
         brightness_ = brightness;
-        break;
+        damping = damping == 0.0 ? kInitialDamping : damping * 10.0;
+        if (damping > kMaxDamping) break;
+        continue;
       }
+      damping = damping * 0.1 < kInitialDamping ? 0.0 : damping * 0.1;
       const double decrease = (current.cost - next.cost) / current.cost;
       T_c_k = T_new;
       current = next;

@@ -16,7 +16,6 @@ Params synthetic_params(const testing::SyntheticScene& scene, const char* residu
   p.sensor.depth_factor = scene.depth_factor;
   p.sensor.depth_range.max_m = 10.0;
   EXPECT_TRUE(ResidualConfig::parse(residuals, &p.tracker.residuals));
-  if (getenv("NOMM")) p.tracker.motion_model = false;
   return p;
 }
 

@@ -34,11 +34,12 @@ std::vector<Plane> scene_planes(bool with_box) {
   const double inf = 1e9;
   const Vector3d X(1, 0, 0), Y(0, 1, 0), Z(0, 0, 1);
   add(-Z, -3.0, X, Y, Vector3d(-inf, -inf, 2.99), Vector3d(inf, inf, 3.01), 0.0);     // back wall
-  add(-Y, -1.2, X, Z, Vector3d(-inf, 1.19, -inf), Vector3d(inf, 1.21, inf), 1.0);     // floor
-  add(X, -2.0, Z, Y, Vector3d(-2.01, -inf, -inf), Vector3d(-1.99, inf, inf), 2.0);    // left wall
+  add(-Y, -0.7, X, Z, Vector3d(-inf, 0.69, -inf), Vector3d(inf, 0.71, inf), 1.0);     // floor
+  add(X, -1.3, Z, Y, Vector3d(-1.31, -inf, -inf), Vector3d(-1.29, inf, inf), 2.0);    // left wall
+  add(-X, -1.5, Z, Y, Vector3d(1.49, -inf, -inf), Vector3d(1.51, inf, inf), 5.0);     // right wall
   if (with_box) {
     add(-Z, -1.6, X, Y, Vector3d(-0.5, -0.2, 1.59), Vector3d(0.1, 0.4, 1.61), 3.0);   // box front
-    add(-X, 0.5, Z, Y, Vector3d(0.49, -0.2, 1.6), Vector3d(0.51, 0.4, 2.2), 4.0);     // box side
+    add(X, 0.1, Z, Y, Vector3d(0.09, -0.2, 1.6), Vector3d(0.11, 0.4, 2.2), 4.0);      // box side
   }
   return planes;
 }

@@ -1,1 +1,97 @@
+// Camera projection, distortion and undistortion round trips; pyramid intrinsics.
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "rgbdtam/core/camera.hpp"
+#include "rgbdtam/core/pyramid.hpp"
+#include "rgbdtam/core/se3.hpp"
+
+namespace rgbdtam {
+namespace {
+
+const RadTanDistortion kFr1{0.2624, -0.9531, -0.0054, 0.0026, 1.1633};
+const PinholeIntrinsics kK{517.3, 516.5, 318.6, 255.3, 640, 480};
+
+TEST(Distortion, UndistortInvertsDistortAcrossTheImage) {
+  for (double u = 0; u <= 640; u += 40) {
+    for (double v = 0; v <= 480; v += 40) {
+      const double x = (u - kK.cx_px) / kK.fx_px, y = (v - kK.cy_px) / kK.fy_px;
+      double xd, yd, xu, yu;
+      kFr1.distort(x, y, &xd, &yd);
+      kFr1.undistort(xd, yd, &xu, &yu);
+      EXPECT_NEAR(xu, x, 1e-9);
+      EXPECT_NEAR(yu, y, 1e-9);
+    }
+  }
+}
+
+TEST(Undistorter, MovesAnImpulseToWhereTheModelSays) {
+  // A bright pixel in the raw image must appear at the undistorted position of that pixel.
+  Undistorter und;
+  und.init(kK, kFr1);
+  ASSERT_FALSE(und.is_identity());
+  const int rx = 80, ry = 60;  // far from the centre, where distortion is strong
+  std::vector<uint8_t> raw(640 * 480, 0);
+  for (int dy = -1; dy <= 1; ++dy)
+    for (int dx = -1; dx <= 1; ++dx) raw[(ry + dy) * 640 + rx + dx] = 255;
+  ImageF out;
+  out.allocate(640, 480);
+  und.undistort_gray(raw.data(), &out);
+  double xu, yu;
+  kFr1.undistort((rx - kK.cx_px) / kK.fx_px, (ry - kK.cy_px) / kK.fy_px, &xu, &yu);
+  const double eu = kK.fx_px * xu + kK.cx_px, ev = kK.fy_px * yu + kK.cy_px;
+  double sum = 0, su = 0, sv = 0;
+  for (int y = 0; y < 480; ++y)
+    for (int x = 0; x < 640; ++x) {
+      sum += out.at(x, y);
+      su += x * out.at(x, y);
+      sv += y * out.at(x, y);
+    }
+  ASSERT_GT(sum, 0);
+  EXPECT_NEAR(su / sum, eu, 0.5);
+  EXPECT_NEAR(sv / sum, ev, 0.5);
+  EXPECT_GT(std::hypot(eu - rx, ev - ry), 5.0) << "the test point should move noticeably";
+}
+
+TEST(Undistorter, IdentityWithoutDistortionAndNearestForDepth) {
+  Undistorter und;
+  und.init(kK, RadTanDistortion());
+  EXPECT_TRUE(und.is_identity());
+  std::vector<uint16_t> depth(640 * 480);
+  for (size_t i = 0; i < depth.size(); ++i) depth[i] = static_cast<uint16_t>(i % 5000);
+  ImageU16 out;
+  out.allocate(640, 480);
+  und.undistort_depth(depth.data(), &out);
+  for (size_t i = 0; i < depth.size(); i += 997) EXPECT_EQ(out.data()[i], depth[i]);
+  // With distortion, every output depth is one of the input values (no interpolation).
+  Undistorter d;
+  d.init(kK, kFr1);
+  std::vector<uint16_t> two(640 * 480);
+  for (size_t i = 0; i < two.size(); ++i) two[i] = (i / 640) % 2 ? 1000 : 3000;
+  d.undistort_depth(two.data(), &out);
+  for (int i = 0; i < out.size(); ++i) {
+    const uint16_t v = out.data()[i];
+    EXPECT_TRUE(v == 0 || v == 1000 || v == 3000) << v;
+  }
+}
+
+TEST(Pyramid, IntrinsicsFollowPixelCentres) {
+  // A 3-D point projects to level l at (u0 - 0.5(2^l - 1)) / 2^l, the 2x2-average convention.
+  FramePyramid p;
+  p.allocate(kK);
+  const Vector3d X(0.2, -0.1, 1.5);
+  const double u0 = kK.fx_px * X.x() / X.z() + kK.cx_px;
+  for (int l = 0; l < kPyramidLevels; ++l) {
+    const PinholeIntrinsics& k = p.intrinsics(l);
+    const double s = std::pow(2.0, l);
+    EXPECT_EQ(k.width_px, 640 >> l);
+    EXPECT_NEAR(k.fx_px * X.x() / X.z() + k.cx_px, (u0 - 0.5 * (s - 1)) / s, 1e-9);
+  }
+  EXPECT_EQ(p.intrinsics(3).width_px, 80);
+  EXPECT_EQ(p.intrinsics(3).height_px, 60);
+}
+
+}  // namespace
+}  // namespace rgbdtam

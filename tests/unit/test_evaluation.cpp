@@ -1,1 +1,102 @@
+// The TUM metrics on trajectories whose answers are known in closed form.
 #include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "rgbdtam/core/evaluation.hpp"
+
+namespace rgbdtam {
+namespace {
+
+std::vector<StampedPose> circle(double t0, double dt, int n, double radius) {
+  std::vector<StampedPose> out;
+  for (int i = 0; i < n; ++i) {
+    const double a = 0.05 * i;
+    out.push_back({t0 + i * dt, SE3(so3_exp(Vector3d(0, a, 0)),
+                                    Vector3d(radius * std::cos(a), 0.1 * std::sin(3 * a),
+                                             radius * std::sin(a)))});
+  }
+  return out;
+}
+
+TEST(Associate, GreedyOneToOneWithinLimit) {
+  const std::vector<double> a = {1.00, 1.03, 1.06, 2.00};
+  const std::vector<double> b = {1.005, 1.012, 1.061, 2.5};
+  const auto m = associate(a, b);
+  // 1.00-1.005 (0.005) and 1.06-1.061 (0.001) match; 1.03 is 0.018 from 1.012 and matches it;
+  // 2.00 has nothing within 0.02.
+  ASSERT_EQ(m.size(), 3u);
+  EXPECT_EQ(m[0], std::make_pair(0, 0));
+  EXPECT_EQ(m[1], std::make_pair(1, 1));
+  EXPECT_EQ(m[2], std::make_pair(2, 2));
+  // Each stamp is used once: two candidates for one b, the closer wins.
+  const auto m2 = associate({1.0, 1.01}, {1.009});
+  ASSERT_EQ(m2.size(), 1u);
+  EXPECT_EQ(m2[0].first, 1);
+}
+
+TEST(Ate, ZeroForARigidlyMovedCopyAndExactForAConstantOffset) {
+  const auto gt = circle(100.0, 0.1, 50, 1.0);
+  auto est = gt;
+  const SE3 G = SE3::exp((Vector6d() << 0.5, -1, 2, 0.3, 0.2, -0.1).finished());
+  for (auto& p : est) p.T_w_c = G * p.T_w_c;
+  AteResult r;
+  ASSERT_TRUE(evaluate_ate(gt, est, &r));
+  EXPECT_EQ(r.compared, 50);
+  EXPECT_LT(r.rmse_m, 1e-9);
+  // Alternating +-1 cm along one axis cannot be aligned away: RMSE is exactly 1 cm.
+  est = gt;
+  for (size_t i = 0; i < est.size(); ++i) {
+    est[i].T_w_c = SE3(est[i].T_w_c.quaternion(),
+                       est[i].T_w_c.translation() + Vector3d(0, 0.01 * (i % 2 ? 1 : -1), 0));
+  }
+  ASSERT_TRUE(evaluate_ate(gt, est, &r));
+  EXPECT_NEAR(r.rmse_m, 0.01, 2e-4);
+}
+
+TEST(Ate, UsesOnlyAssociatedPoses) {
+  const auto gt = circle(100.0, 0.01, 300, 1.0);
+  auto est = circle(100.0, 0.03, 100, 1.0);  // a 30 Hz estimate of a 100 Hz ground truth
+  est.push_back({500.0, SE3()});             // no ground truth near it: ignored
+  AteResult r;
+  ASSERT_TRUE(evaluate_ate(gt, est, &r));
+  EXPECT_EQ(r.compared, 100);
+  EXPECT_FALSE(evaluate_ate(gt, {{900.0, SE3()}}, &r));
+}
+
+TEST(Rpe, ZeroForRigidCopyAndMatchesAKnownDrift) {
+  const auto gt = circle(10.0, 0.1, 60, 1.0);
+  auto est = gt;
+  const SE3 G = SE3::exp((Vector6d() << 1, 2, 3, 0.1, 0.2, 0.3).finished());
+  for (auto& p : est) p.T_w_c = G * p.T_w_c;
+  RpeResult r;
+  ASSERT_TRUE(evaluate_rpe(gt, est, 1.0, &r));
+  EXPECT_LT(r.trans_rmse_m, 1e-9);
+  EXPECT_LT(r.rot_rmse_deg, 1e-6);
+  // On a rotation-free path, a drift of 2 cm per 0.1 s along x is 20 cm per second.
+  std::vector<StampedPose> line;
+  for (int i = 0; i < 60; ++i) line.push_back({10.0 + 0.1 * i, SE3(Eigen::Quaterniond::Identity(), Vector3d(0, 0, 0.05 * i))});
+  est = line;
+  for (size_t i = 0; i < est.size(); ++i) {
+    est[i].T_w_c = est[i].T_w_c * SE3(Eigen::Quaterniond::Identity(), Vector3d(0.02 * i, 0, 0));
+  }
+  ASSERT_TRUE(evaluate_rpe(line, est, 1.0, &r));
+  EXPECT_NEAR(r.trans_rmse_m, 0.20, 1e-6);
+  // Pairs whose later index is the last estimate are dropped, as in evaluate_rpe.py.
+  EXPECT_EQ(r.compared, 50 - 1);
+}
+
+TEST(Coverage, CountsFramesWithGroundTruthOnly) {
+  const auto gt = circle(0.0, 0.01, 200, 1.0);  // covers 0 .. 1.99 s
+  std::vector<double> frames;
+  for (int i = 0; i < 80; ++i) frames.push_back(i * 1.0 / 30.0);  // 0 .. 2.63 s
+  std::vector<StampedPose> est;
+  for (int i = 0; i < 80; i += 2) est.push_back({frames[static_cast<size_t>(i)], SE3()});
+  const Coverage c = evaluate_coverage(frames, gt, est);
+  EXPECT_EQ(c.frames, 61);     // frames 0 .. 60, up to 1.99 + 0.02 s
+  EXPECT_EQ(c.estimated, 31);  // the even ones
+  EXPECT_DOUBLE_EQ(c.fraction(), 31.0 / 61.0);
+}
+
+}  // namespace
+}  // namespace rgbdtam

@@ -1,1 +1,113 @@
+// Config files: the shipped ones load, and every kind of bad value is a clear error that
+// names the file and the key.
 #include <gtest/gtest.h>
+
+#include <string>
+
+#include "rgbdtam/hal/file.hpp"
+#include "rgbdtam/runtime/params.hpp"
+#include "test_paths.hpp"
+
+namespace rgbdtam {
+namespace {
+
+const char* kMinimal =
+    "camera.width = 640\ncamera.height = 480\ncamera.fx = 500\ncamera.fy = 500\n"
+    "camera.cx = 320\ncamera.cy = 240\ndepth.factor = 1000\n";
+
+Status parse(const std::string& text, Params* p) { return parse_params(text.c_str(), "test.conf", p); }
+
+TEST(Params, ShippedConfigsLoad) {
+  for (const char* name : {"config/tum_fr1.conf", "config/tum_fr2.conf", "config/tum_fr3.conf",
+                           "config/kinect_v1.conf"}) {
+    char* text = nullptr;
+    const std::string path = testing::source_path(name);
+    ASSERT_TRUE(read_text_file(path.c_str(), 1 << 20, &text).is_ok()) << path;
+    Params p;
+    const Status s = parse_params(text, path.c_str(), &p);
+    delete[] text;
+    EXPECT_TRUE(s.is_ok()) << s.message();
+  }
+}
+
+TEST(Params, ValuesAndDefaults) {
+  Params p;
+  ASSERT_TRUE(parse(std::string(kMinimal) + "tracker.residuals = GIDD*  # comment\n"
+                    "tracker.motion_model = false\ndepth.max_rgb_dt = 1.5e7\n",
+                    &p)
+                  .is_ok());
+  EXPECT_EQ(p.camera.fx_px, 500.0);
+  EXPECT_EQ(p.sensor.depth_factor, 1000.0);
+  EXPECT_FALSE(p.tracker.motion_model);
+  EXPECT_EQ(p.sensor.max_rgb_depth_dt_ns, 15'000'000);
+  EXPECT_EQ(p.tracker.residuals.photometric, PhotometricMode::kOff);
+  EXPECT_EQ(p.tracker.residuals.sampling, GeometricSampling::kDense);
+  EXPECT_EQ(p.keyframe_pool_size, Params().keyframe_pool_size);  // untouched keys keep defaults
+}
+
+void expect_error(const std::string& text, const char* must_contain) {
+  Params p;
+  const Params before = p;
+  const Status s = parse(text, &p);
+  ASSERT_FALSE(s.is_ok()) << text;
+  const std::string msg = s.message();
+  EXPECT_NE(msg.find("test.conf"), std::string::npos) << msg;
+  EXPECT_NE(msg.find(must_contain), std::string::npos) << msg;
+  EXPECT_EQ(p.camera.fx_px, before.camera.fx_px) << "a failed load must not change the params";
+}
+
+TEST(Params, BadValuesNameTheFileAndTheKey) {
+  expect_error(std::string(kMinimal) + "tracker.robust_cc = 2\n", "unknown key 'tracker.robust_cc'");
+  expect_error(std::string(kMinimal) + "camera.fx =\n", "'camera.fx' has no value");
+  expect_error(std::string(kMinimal) + "tracker.keyframe_overlap = 1.5\n", "'tracker.keyframe_overlap'");
+  expect_error(std::string(kMinimal) + "tracker.keyframe_overlap = 1.5\n", "out of range");
+  expect_error(std::string(kMinimal) + "camera.fx = five hundred\n", "is not a number");
+  expect_error(std::string(kMinimal) + "map.keyframe_pool = 3.5\n", "not a whole number");
+  expect_error(std::string(kMinimal) + "tracker.motion_model = maybe\n", "true/false");
+  expect_error(std::string(kMinimal) + "tracker.residuals = PX+GIDD\n", "residual configuration");
+  expect_error(std::string(kMinimal) + "just some words\n", "expected 'key = value'");
+  expect_error("camera.width = 640\n", "missing required key");
+  expect_error(std::string(kMinimal) + "camera.width = 636\n", "divisible by 8");
+  expect_error(std::string(kMinimal) + "depth.min = 4\ndepth.max = 2\n", "'depth.min'");
+  expect_error(std::string(kMinimal) + "camera.fx = nan\n", "is not a number");
+}
+
+TEST(Params, ErrorsGiveTheLineNumber) {
+  Params p;
+  const Status s = parse(std::string(kMinimal) + "\n# fine\nbogus = 1\n", &p);
+  ASSERT_FALSE(s.is_ok());
+  EXPECT_NE(std::string(s.message()).find("test.conf:10"), std::string::npos) << s.message();
+}
+
+TEST(Params, OverridesAndPrintRoundTrip) {
+  Params p;
+  ASSERT_TRUE(parse(kMinimal, &p).is_ok());
+  ASSERT_TRUE(set_param("tracker.robust_c=3.5", "--set", &p).is_ok());
+  EXPECT_EQ(p.tracker.robust_c, 3.5);
+  EXPECT_FALSE(set_param("tracker.robust_c=-1", "--set", &p).is_ok());
+  EXPECT_EQ(p.tracker.robust_c, 3.5);
+  static char printed[16384];
+  print_params(p, printed, sizeof(printed));
+  Params q;
+  ASSERT_TRUE(parse_params(printed, "printed", &q).is_ok());
+  static char again[16384];
+  print_params(q, again, sizeof(again));
+  EXPECT_STREQ(printed, again);
+}
+
+TEST(ResidualConfig, ParsesEveryAblationName) {
+  for (const char* name : {"PS", "PD", "GIDS", "GIDD", "GIDD*", "PS+GIDD", "PS+GDD", "PD+GIDD*"}) {
+    ResidualConfig c;
+    ASSERT_TRUE(ResidualConfig::parse(name, &c)) << name;
+    char back[16];
+    c.name(back, sizeof(back));
+    EXPECT_STREQ(back, name);
+  }
+  ResidualConfig c;
+  for (const char* bad : {"", "P", "GID", "PS+", "+GIDD", "PS+PD", "GIDDD", "ps"}) {
+    EXPECT_FALSE(ResidualConfig::parse(bad, &c)) << bad;
+  }
+}
+
+}  // namespace
+}  // namespace rgbdtam

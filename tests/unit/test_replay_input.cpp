@@ -1,1 +1,203 @@
+// Replay input: TUM lists, timestamps, PNG decoding, and bad input of every kind reported
+// and skipped, never a crash.
 #include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "replay_job.hpp"
+#include "rgbdtam/hal/file.hpp"
+#include "rgbdtam/hal/tum_replay_source.hpp"
+#include "rgbdtam/hal/tum_timestamp.hpp"
+#include "test_paths.hpp"
+#include "tum_writer.hpp"
+
+namespace rgbdtam {
+namespace {
+
+TEST(Timestamps, ExactNanosecondsBothWays) {
+  int64_t ns = 0;
+  ASSERT_NE(parse_seconds_ns("1305031102.175304 rgb/x.png", &ns), nullptr);
+  EXPECT_EQ(ns, 1305031102175304000LL);
+  char buf[32];
+  format_seconds(ns, buf, sizeof(buf));
+  EXPECT_STREQ(buf, "1305031102.175304");
+  ASSERT_NE(parse_seconds_ns("12.000000001", &ns), nullptr);
+  format_seconds(ns, buf, sizeof(buf));
+  EXPECT_STREQ(buf, "12.000000001");
+  EXPECT_EQ(parse_seconds_ns("rgb/x.png", &ns), nullptr);
+  EXPECT_EQ(parse_seconds_ns("", &ns), nullptr);
+}
+
+TEST(TumList, SkipsCommentsAndCountsBadLines) {
+  TumList list;
+  const char* text =
+      "# color images\n2.0 rgb/b.png\n1.0 rgb/a.png\n\n3.0\nnot-a-stamp rgb/c.png\n4.0 rgb/d.png";
+  ASSERT_TRUE(parse_tum_list(text, "rgb.txt", &list).is_ok());
+  ASSERT_EQ(list.size, 3);
+  EXPECT_EQ(list.bad_lines, 2);
+  EXPECT_STREQ(list.entries[0].path, "rgb/a.png");  // sorted by time
+  EXPECT_STREQ(list.entries[2].path, "rgb/d.png");  // no newline at the end is fine
+  EXPECT_NE(std::string(list.first_problem.message()).find("rgb.txt:5"), std::string::npos)
+      << list.first_problem.message();
+  EXPECT_FALSE(parse_tum_list("# only comments\n", "empty.txt", &list).is_ok());
+}
+
+TEST(PngDecoder, ColourBecomesBt601GreyAndBadFilesAreErrors) {
+  const std::string dir = testing::make_temp_dir("png");
+  std::vector<uint8_t> rgb(16 * 8 * 3);
+  for (size_t i = 0; i < rgb.size(); ++i) rgb[i] = static_cast<uint8_t>(i * 37 % 256);
+  ASSERT_TRUE(testing::write_png_rgb8(dir + "/c.png", 16, 8, rgb.data()));
+  std::vector<uint8_t> file(1 << 16);
+  size_t size = 0;
+  ASSERT_TRUE(read_file((dir + "/c.png").c_str(), file.data(), file.size(), &size).is_ok());
+  PngDecoder png;
+  png.allocate(16);
+  std::vector<uint8_t> gray(16 * 8);
+  ASSERT_TRUE(png.decode_gray8(file.data(), size, 16, 8, gray.data()).is_ok());
+  for (int i = 0; i < 16 * 8; ++i) {
+    const int expect = (299 * rgb[3 * i] + 587 * rgb[3 * i + 1] + 114 * rgb[3 * i + 2] + 500) / 1000;
+    EXPECT_EQ(gray[static_cast<size_t>(i)], expect);
+  }
+  EXPECT_FALSE(png.decode_gray8(file.data(), size, 17, 8, gray.data()).is_ok()) << "wrong size";
+  EXPECT_FALSE(png.decode_gray8(file.data(), size / 2, 16, 8, gray.data()).is_ok()) << "truncated";
+  std::vector<uint8_t> flipped(file.begin(), file.begin() + static_cast<long>(size));
+  flipped[size / 2] ^= 0xFF;
+  EXPECT_FALSE(png.decode_gray8(flipped.data(), size, 16, 8, gray.data()).is_ok()) << "bad CRC";
+  std::vector<uint16_t> depth(16 * 8);
+  EXPECT_FALSE(png.decode_gray16(file.data(), size, 16, 8, depth.data()).is_ok())
+      << "a colour PNG is not depth";
+  const uint8_t garbage[64] = {1, 2, 3};
+  EXPECT_FALSE(png.decode_gray8(garbage, sizeof(garbage), 16, 8, gray.data()).is_ok());
+}
+
+class BrokenSequence : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = testing::make_temp_dir("seq");
+    ASSERT_TRUE(testing::write_synthetic_sequence(dir_, scene_, kFrames, 10.0));
+    std::ifstream in(dir_ + "/rgb.txt");
+    std::ifstream din(dir_ + "/depth.txt");
+    std::string line;
+    while (std::getline(in, line))
+      if (line[0] != '#') rgb_.push_back(line.substr(line.find(' ') + 1));
+    while (std::getline(din, line))
+      if (line[0] != '#') depth_.push_back(line.substr(line.find(' ') + 1));
+  }
+  std::vector<std::string> deliver_all(int* skipped, int* without_depth) {
+    TumReplaySource src;
+    EXPECT_TRUE(src.open(dir_.c_str(), 640, 480, 20'000'000, 0).is_ok());
+    std::vector<std::string> problems;
+    *skipped = *without_depth = 0;
+    for (;;) {
+      SensorFrame f;
+      Status warning;
+      const Status s = src.next(&f, &warning);
+      if (s.code() == StatusCode::kEndOfStream) break;
+      if (!s.is_ok()) {
+        ++*skipped;
+        problems.push_back(s.message());
+        continue;
+      }
+      if (f.depth == nullptr) {
+        ++*without_depth;
+        problems.push_back(warning.message());
+      }
+    }
+    return problems;
+  }
+  static constexpr int kFrames = 8;
+  testing::SyntheticScene scene_;
+  std::string dir_;
+  std::vector<std::string> rgb_, depth_;
+};
+
+TEST_F(BrokenSequence, CleanSequenceDeliversEveryFrameWithDepth) {
+  int skipped, without_depth;
+  deliver_all(&skipped, &without_depth);
+  EXPECT_EQ(skipped, 0);
+  EXPECT_EQ(without_depth, 0);
+}
+
+TEST_F(BrokenSequence, CorruptAndMissingImagesAreReportedAndSkipped) {
+  // Frame 2's colour image is garbage, frame 4's is truncated, frame 6's depth is missing.
+  ASSERT_TRUE(testing::write_text(dir_ + "/" + rgb_[2], "this is not a PNG file at all"));
+  {
+    std::ifstream in(dir_ + "/" + rgb_[4], std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::ofstream out(dir_ + "/" + rgb_[4], std::ios::binary | std::ios::trunc);
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size() / 3));
+  }
+  ASSERT_EQ(::unlink((dir_ + "/" + depth_[6]).c_str()), 0);
+  int skipped, without_depth;
+  const auto problems = deliver_all(&skipped, &without_depth);
+  EXPECT_EQ(skipped, 2);
+  EXPECT_EQ(without_depth, 1);
+  ASSERT_EQ(problems.size(), 3u);
+  EXPECT_NE(problems[0].find(rgb_[2]), std::string::npos) << problems[0];
+  EXPECT_NE(problems[1].find("truncated"), std::string::npos) << problems[1];
+  EXPECT_NE(problems[2].find(depth_[6]), std::string::npos) << problems[2];
+}
+
+TEST_F(BrokenSequence, TruncatedListFileKeepsTheGoodLines) {
+  // Cut rgb.txt in the middle of its last line, as an interrupted copy would.
+  std::ifstream in(dir_ + "/rgb.txt");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  text.resize(text.size() - rgb_.back().size() - 1);
+  ASSERT_TRUE(testing::write_text(dir_ + "/rgb.txt", text));
+  TumReplaySource src;
+  ASSERT_TRUE(src.open(dir_.c_str(), 640, 480, 20'000'000, 0).is_ok());
+  EXPECT_EQ(src.frame_count(), kFrames - 1);
+  EXPECT_EQ(src.rgb_list().bad_lines, 1);
+}
+
+TEST_F(BrokenSequence, MissingDepthFrameInTheListMeansNoDepthForThatFrame) {
+  // Drop depth line 3 from depth.txt: colour frame 3 has no depth within 20 ms any more.
+  std::string text = "# depth\n";
+  for (size_t i = 0; i < depth_.size(); ++i) {
+    if (i == 3) continue;
+    text += depth_[i].substr(6, depth_[i].size() - 10) + " " + depth_[i] + "\n";
+  }
+  ASSERT_TRUE(testing::write_text(dir_ + "/depth.txt", text));
+  int skipped, without_depth;
+  const auto problems = deliver_all(&skipped, &without_depth);
+  EXPECT_EQ(skipped, 0);
+  EXPECT_EQ(without_depth, 1);
+  ASSERT_FALSE(problems.empty());
+  EXPECT_NE(problems[0].find("no depth frame"), std::string::npos) << problems[0];
+}
+
+TEST_F(BrokenSequence, ReplayTracksThroughBrokenFrames) {
+  ASSERT_TRUE(testing::write_text(dir_ + "/" + rgb_[3], "garbage"));
+  ASSERT_EQ(::unlink((dir_ + "/" + depth_[5]).c_str()), 0);
+  ASSERT_TRUE(testing::write_text(dir_ + "/synthetic.conf", testing::synthetic_config(scene_)));
+  ReplayOptions opt;
+  opt.sequence = dir_.c_str();
+  opt.progress = false;
+  char* text = nullptr;
+  ASSERT_TRUE(read_text_file((dir_ + "/synthetic.conf").c_str(), 4096, &text).is_ok());
+  ASSERT_TRUE(parse_params(text, "synthetic.conf", &opt.params).is_ok());
+  delete[] text;
+  ReplayJob job;
+  ASSERT_TRUE(job.init(opt).is_ok());
+  while (job.step()) {
+  }
+  ASSERT_TRUE(job.finish().is_ok());
+  EXPECT_EQ(job.source().counters().skipped, 1u);
+  EXPECT_EQ(job.counters().without_depth, 1u);
+  EXPECT_EQ(job.counters().tracked, static_cast<uint32_t>(kFrames - 1));
+}
+
+TEST(ReplaySource, MissingFolderIsAClearError) {
+  TumReplaySource src;
+  const Status s = src.open("/nonexistent/sequence", 640, 480, 20'000'000, 0);
+  ASSERT_FALSE(s.is_ok());
+  EXPECT_NE(std::string(s.message()).find("/nonexistent/sequence/rgb.txt"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace rgbdtam

@@ -100,14 +100,16 @@ class Tracker {
   void sample_geometric(const FixedVector<TrackPoint>& pts, const ImageF& inv_depth,
                         const PinholeIntrinsics& k, const SE3& T_c_k);
   void estimate_gain_brightness(const FixedVector<TrackPoint>& pts);
-  double robust_scale(int n);
+  float mad_sigma(int count);
+  void update_scales(int n_photometric, int n_geometric);
   LevelCost accumulate(const FixedVector<TrackPoint>& ph, const FixedVector<TrackPoint>& geo);
 
   TrackerOptions opt_;
   // Per-point scratch, indexed like the keyframe's point sets.
   const FixedVector<TrackPoint> no_points_;  // stands in for the geometric set without depth
-  FixedVector<float> ph_sample_, ph_residual_, geo_residual_, geo_sigma_, scratch_;
+  FixedVector<float> ph_sample_, ph_residual_, geo_residual_, geo_sigma_, scratch_;  // scratch: max(ph, geo)
   float gain_ = 1.f, brightness_ = 0.f, ph_sigma_ = 0.05f;
+  float geo_scale_ = 1.f;  // >= 1: geometric spread in sensor standard deviations
 };
 
 }  // namespace rgbdtam

@@ -1,0 +1,41 @@
+#include "replay_runner.hpp"
+
+#include "rgbdtam/hal/file.hpp"
+#include "rgbdtam/hal/tum_trajectory.hpp"
+
+namespace rgbdtam::testing {
+
+ReplayOutcome replay_and_evaluate(const std::string& sequence, const std::string& config,
+                                  const char* override_assignment) {
+  ReplayOutcome out;
+  ReplayOptions opt;
+  opt.sequence = sequence.c_str();
+  opt.progress = false;
+  char* text = nullptr;
+  if (!read_text_file(config.c_str(), 1 << 20, &text).is_ok()) return out;
+  const Status s = parse_params(text, config.c_str(), &opt.params);
+  delete[] text;
+  if (!s.is_ok()) return out;
+  if (override_assignment != nullptr && !set_param(override_assignment, "test", &opt.params).is_ok()) {
+    return out;
+  }
+  ReplayJob job;
+  if (!job.init(opt).is_ok()) return out;
+  while (job.step()) {
+  }
+  if (!job.finish().is_ok()) return out;
+  std::vector<StampedPose> gt;
+  int bad = 0;
+  if (!read_tum_trajectory((sequence + "/groundtruth.txt").c_str(), &gt, &bad).is_ok()) return out;
+  std::vector<double> stamps;
+  for (int i = 0; i < job.source().rgb_list().size; ++i) {
+    stamps.push_back(job.source().rgb_list().entries[i].timestamp_ns * 1e-9);
+  }
+  out.report = evaluate_all(gt, job.estimates(), &stamps);
+  out.counters = job.counters();
+  out.tracking_median_ms = job.tracking_time().percentile_ms(0.5);
+  out.ran = true;
+  return out;
+}
+
+}  // namespace rgbdtam::testing

@@ -1,0 +1,105 @@
+#include "tum_writer.hpp"
+
+#include <png.h>
+#include <sys/stat.h>
+
+#include <cstdio>
+
+namespace rgbdtam::testing {
+namespace {
+bool write_png(const std::string& path, int w, int h, int bit_depth, int color_type,
+               const void* data, int bytes_per_row) {
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  if (f == nullptr) return false;
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  png_infop info = png_create_info_struct(png);
+  if (setjmp(png_jmpbuf(png))) {
+    png_destroy_write_struct(&png, &info);
+    std::fclose(f);
+    return false;
+  }
+  png_init_io(png, f);
+  png_set_IHDR(png, info, static_cast<png_uint_32>(w), static_cast<png_uint_32>(h), bit_depth,
+               color_type, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+               PNG_FILTER_TYPE_DEFAULT);
+  png_write_info(png, info);
+  if (bit_depth == 16) png_set_swap(png);
+  for (int y = 0; y < h; ++y) {
+    png_write_row(png, static_cast<png_const_bytep>(data) + static_cast<size_t>(y) * bytes_per_row);
+  }
+  png_write_end(png, nullptr);
+  png_destroy_write_struct(&png, &info);
+  return std::fclose(f) == 0;
+}
+
+void stamp(double t, char* buf, size_t n) { std::snprintf(buf, n, "%.6f", t); }
+
+void write_pose(std::FILE* f, double t, const SE3& T) {
+  const Vector3d& p = T.translation();
+  const Eigen::Quaterniond& q = T.quaternion();
+  std::fprintf(f, "%.6f %.7f %.7f %.7f %.7f %.7f %.7f %.7f\n", t, p.x(), p.y(), p.z(), q.x(), q.y(),
+               q.z(), q.w());
+}
+}  // namespace
+
+bool write_png_gray8(const std::string& path, int w, int h, const uint8_t* px) {
+  return write_png(path, w, h, 8, PNG_COLOR_TYPE_GRAY, px, w);
+}
+bool write_png_rgb8(const std::string& path, int w, int h, const uint8_t* rgb) {
+  return write_png(path, w, h, 8, PNG_COLOR_TYPE_RGB, rgb, 3 * w);
+}
+bool write_png_gray16(const std::string& path, int w, int h, const uint16_t* px) {
+  return write_png(path, w, h, 16, PNG_COLOR_TYPE_GRAY, px, 2 * w);
+}
+
+bool write_text(const std::string& path, const std::string& text) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (f == nullptr) return false;
+  std::fputs(text.c_str(), f);
+  return std::fclose(f) == 0;
+}
+
+bool write_synthetic_sequence(const std::string& dir, const SyntheticScene& scene, int frames,
+                              double fps) {
+  ::mkdir((dir + "/rgb").c_str(), 0755);
+  ::mkdir((dir + "/depth").c_str(), 0755);
+  std::FILE* rgb = std::fopen((dir + "/rgb.txt").c_str(), "w");
+  std::FILE* depth = std::fopen((dir + "/depth.txt").c_str(), "w");
+  std::FILE* gt = std::fopen((dir + "/groundtruth.txt").c_str(), "w");
+  if (rgb == nullptr || depth == nullptr || gt == nullptr) return false;
+  std::fputs("# color images\n# timestamp filename\n", rgb);
+  std::fputs("# depth maps\n# timestamp filename\n", depth);
+  std::fputs("# ground truth trajectory\n# timestamp tx ty tz qx qy qz qw\n", gt);
+  bool ok = true;
+  const double t0 = 1000.0;  // like the benchmark, stamps far from zero
+  for (int i = 0; i < frames && ok; ++i) {
+    const double t = i / fps;
+    const SE3 T_w_c = SyntheticScene::pose_at(t);
+    const SyntheticFrame f = scene.render(T_w_c);
+    char rs[32], ds[32];
+    stamp(t0 + t, rs, sizeof(rs));
+    stamp(t0 + t + 0.005, ds, sizeof(ds));
+    const int w = scene.camera.width_px, h = scene.camera.height_px;
+    ok = write_png_gray8(dir + "/rgb/" + rs + ".png", w, h, f.gray.data()) &&
+         write_png_gray16(dir + "/depth/" + ds + ".png", w, h, f.depth.data());
+    std::fprintf(rgb, "%s rgb/%s.png\n", rs, rs);
+    std::fprintf(depth, "%s depth/%s.png\n", ds, ds);
+    write_pose(gt, t0 + t, T_w_c);
+  }
+  ok = (std::fclose(rgb) == 0) && ok;
+  ok = (std::fclose(depth) == 0) && ok;
+  ok = (std::fclose(gt) == 0) && ok;
+  return ok;
+}
+
+std::string synthetic_config(const SyntheticScene& s) {
+  char buf[512];
+  std::snprintf(buf, sizeof(buf),
+                "camera.width = %d\ncamera.height = %d\ncamera.fx = %.6f\ncamera.fy = %.6f\n"
+                "camera.cx = %.6f\ncamera.cy = %.6f\ndepth.factor = %.1f\ndepth.max = 10\n",
+                s.camera.width_px, s.camera.height_px, s.camera.fx_px, s.camera.fy_px,
+                s.camera.cx_px, s.camera.cy_px, s.depth_factor);
+  return buf;
+}
+
+}  // namespace rgbdtam::testing

@@ -1,0 +1,24 @@
+#pragma once
+// Writes PNGs and whole TUM RGB-D folders, so tests can build sequences (and break them).
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "synthetic_scene.hpp"
+
+namespace rgbdtam::testing {
+
+bool write_png_gray8(const std::string& path, int w, int h, const uint8_t* px);
+bool write_png_rgb8(const std::string& path, int w, int h, const uint8_t* rgb);
+bool write_png_gray16(const std::string& path, int w, int h, const uint16_t* px);
+
+// Renders `frames` frames of the scene's path at `fps` into a TUM folder (rgb/, depth/,
+// rgb.txt, depth.txt, groundtruth.txt, camera-to-world). Depth is stamped 5 ms after colour.
+bool write_synthetic_sequence(const std::string& dir, const SyntheticScene& scene, int frames,
+                              double fps);
+// The config text matching the scene's camera.
+std::string synthetic_config(const SyntheticScene& scene);
+bool write_text(const std::string& path, const std::string& text);
+
+}  // namespace rgbdtam::testing
