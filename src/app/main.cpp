@@ -18,7 +18,7 @@ void usage() {
   std::fprintf(stderr,
                "usage:\n"
                "  rgbdtam replay <sequence-dir> --config <file> [--trajectory out.txt]\n"
-               "                 [--set key=value]... [--max-frames N] [--quiet]\n"
+               "                 [--set key=value]... [--max-frames N] [--quiet] [--json]\n"
                "  rgbdtam eval <groundtruth.txt> <estimate.txt> [--json] [--frames rgb.txt]\n"
                "  rgbdtam params --config <file> [--set key=value]...\n");
 }
@@ -80,6 +80,7 @@ int params_command(int argc, char** argv) {
 int replay_command(int argc, char** argv) {
   ConfigArgs c;
   ReplayOptions options;
+  bool json = false;  // one JSON object on stdout instead of the human summary
   for (int i = 0; i < argc; ++i) {
     if (take_config_arg(argc, argv, &i, &c)) continue;
     if (std::strcmp(argv[i], "--trajectory") == 0 && i + 1 < argc) {
@@ -87,6 +88,9 @@ int replay_command(int argc, char** argv) {
     } else if (std::strcmp(argv[i], "--max-frames") == 0 && i + 1 < argc) {
       options.max_frames = std::atoi(argv[++i]);
     } else if (std::strcmp(argv[i], "--quiet") == 0) {
+      options.progress = false;
+    } else if (std::strcmp(argv[i], "--json") == 0) {
+      json = true;
       options.progress = false;
     } else if (argv[i][0] != '-' && options.sequence == nullptr) {
       options.sequence = argv[i];
@@ -115,14 +119,17 @@ int replay_command(int argc, char** argv) {
   }
   s = job->finish();
   if (!s.is_ok()) std::fprintf(stderr, "rgbdtam replay: %s\n", s.message());
-  job->print_summary();
-  if (options.trajectory_path != nullptr) {
-    std::printf("trajectory: %s (%zu poses)\n", options.trajectory_path, job->estimates().size());
+  if (!json) {
+    job->print_summary();
+    if (options.trajectory_path != nullptr) {
+      std::printf("trajectory: %s (%zu poses)\n", options.trajectory_path, job->estimates().size());
+    }
   }
   // Evaluate against the sequence's own ground truth when it has one.
   const std::string gt_path = std::string(options.sequence) + "/groundtruth.txt";
   std::vector<StampedPose> gt;
   int bad = 0;
+  EvaluationReport report;
   if (read_tum_trajectory(gt_path.c_str(), &gt, &bad).is_ok()) {
     std::vector<double> stamps;
     for (int i = 0; i < job->source().rgb_list().size; ++i) {
@@ -131,8 +138,10 @@ int replay_command(int argc, char** argv) {
     if (options.max_frames > 0 && static_cast<int>(stamps.size()) > options.max_frames) {
       stamps.resize(static_cast<size_t>(options.max_frames));
     }
-    print_report(evaluate_all(gt, job->estimates(), &stamps), false, "all frames");
+    report = evaluate_all(gt, job->estimates(), &stamps);
+    if (!json) print_report(report, false, "all frames");
   }
+  if (json) job->print_json(report);
   return s.is_ok() ? 0 : 1;
 }
 

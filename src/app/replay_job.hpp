@@ -4,6 +4,7 @@
 
 #include <vector>
 
+#include "evaluate_command.hpp"
 #include "rgbdtam/core/evaluation.hpp"
 #include "rgbdtam/hal/tum_replay_source.hpp"
 #include "rgbdtam/hal/tum_trajectory.hpp"
@@ -27,6 +28,8 @@ class ReplayJob {
   bool step();
   Status finish();  // flushes the trajectory
   void print_summary() const;
+  // The summary and the evaluation as one JSON object, for tools/bench.sh.
+  void print_json(const EvaluationReport& report) const;
 
   const std::vector<StampedPose>& estimates() const { return estimates_; }
   const TrackingCounters& counters() const { return pipeline_.counters(); }

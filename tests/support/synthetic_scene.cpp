@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <tuple>
 
 namespace rgbdtam::testing {
 namespace {
@@ -59,37 +61,55 @@ SyntheticFrame SyntheticScene::render(const SE3& T_w_c) const {
   f.depth.resize(static_cast<size_t>(w) * h);
   const Matrix3d R = T_w_c.rotation();
   const Vector3d o = T_w_c.translation();
-  auto cast = [&](double px, double py, Hit* best) {
-    const Vector3d ray_c((px - camera.cx_px) / camera.fx_px, (py - camera.cy_px) / camera.fy_px, 1.0);
-    const Vector3d ray_w = R * ray_c;
-    for (const Plane& pl : planes) {
-      const double denom = pl.n.dot(ray_w);
+  // Per plane, the ray terms that do not depend on the pixel.
+  struct Prepared {
+    double n_dot_rx, n_dot_ry, n_dot_r1, numerator;
+  };
+  std::vector<Prepared> prep;
+  for (const Plane& pl : planes) {
+    const Vector3d nr = R.transpose() * pl.n;  // n . (R ray_c) = (R^T n) . ray_c
+    prep.push_back({nr.x(), nr.y(), nr.z(), pl.d - pl.n.dot(o)});
+  }
+  // Returns the texture value and writes the ray depth (camera z) of the nearest hit.
+  auto cast = [&](double px, double py, double* depth) {
+    const double rx = (px - camera.cx_px) / camera.fx_px, ry = (py - camera.cy_px) / camera.fy_px;
+    double best = 1e30, value = 0.0;
+    for (size_t k = 0; k < planes.size(); ++k) {
+      const Prepared& q = prep[k];
+      const double denom = q.n_dot_rx * rx + q.n_dot_ry * ry + q.n_dot_r1;
       if (std::fabs(denom) < 1e-12) continue;
-      const double t = (pl.d - pl.n.dot(o)) / denom;
-      if (t <= 0.01 || t >= best->t) continue;
-      const Vector3d x = o + t * ray_w;
+      const double t = q.numerator / denom;
+      if (t <= 0.01 || t >= best) continue;
+      const Vector3d x = o + t * (R * Vector3d(rx, ry, 1.0));
+      const Plane& pl = planes[k];
       if ((x.array() < pl.lo.array()).any() || (x.array() > pl.hi.array()).any()) continue;
-      best->t = t;
-      best->u = texture(x.dot(pl.u_axis), x.dot(pl.v_axis), pl.phase);
+      best = t;
+      value = texture(x.dot(pl.u_axis), x.dot(pl.v_axis), pl.phase);
     }
+    *depth = best;
+    return value;
   };
   for (int y = 0; y < h; ++y) {
     for (int x = 0; x < w; ++x) {
-      double sum = 0;
-      for (int s = 0; s < 4; ++s) {
-        Hit hit;
-        cast(x - 0.25 + 0.5 * (s & 1), y - 0.25 + 0.5 * (s >> 1), &hit);
-        sum += hit.t < 1e29 ? hit.u : 0.0;
-      }
-      Hit centre;
-      cast(x, y, &centre);
+      double depth;
+      const double value = cast(x, y, &depth);
       const size_t i = static_cast<size_t>(y) * w + x;
-      f.gray[i] = static_cast<uint8_t>(std::clamp(std::lround(sum / 4.0 * 255.0), 0L, 255L));
-      const bool measured = centre.t < max_depth_m;
-      f.depth[i] = measured ? static_cast<uint16_t>(std::lround(centre.t * depth_factor)) : 0;
+      f.gray[i] = static_cast<uint8_t>(std::clamp(std::lround(value * 255.0), 0L, 255L));
+      const bool measured = depth < max_depth_m;
+      f.depth[i] = measured ? static_cast<uint16_t>(std::lround(depth * depth_factor)) : 0;
     }
   }
   return f;
+}
+
+const std::vector<SyntheticFrame>& SyntheticScene::render_path(int frames, double fps) const {
+  // Tests of one binary share the renders of one path.
+  static std::map<std::tuple<int, int, double, bool>, std::vector<SyntheticFrame>> cache;
+  std::vector<SyntheticFrame>& out = cache[std::make_tuple(camera.width_px, frames, fps, with_box)];
+  while (static_cast<int>(out.size()) < frames) {
+    out.push_back(render(pose_at(static_cast<double>(out.size()) / fps)));
+  }
+  return out;
 }
 
 }  // namespace rgbdtam::testing

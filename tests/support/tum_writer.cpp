@@ -72,10 +72,11 @@ bool write_synthetic_sequence(const std::string& dir, const SyntheticScene& scen
   std::fputs("# ground truth trajectory\n# timestamp tx ty tz qx qy qz qw\n", gt);
   bool ok = true;
   const double t0 = 1000.0;  // like the benchmark, stamps far from zero
+  const std::vector<SyntheticFrame>& rendered = scene.render_path(frames, fps);
   for (int i = 0; i < frames && ok; ++i) {
     const double t = i / fps;
     const SE3 T_w_c = SyntheticScene::pose_at(t);
-    const SyntheticFrame f = scene.render(T_w_c);
+    const SyntheticFrame& f = rendered[static_cast<size_t>(i)];
     char rs[32], ds[32];
     stamp(t0 + t, rs, sizeof(rs));
     stamp(t0 + t + 0.005, ds, sizeof(ds));

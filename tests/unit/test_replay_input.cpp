@@ -90,7 +90,7 @@ class BrokenSequence : public ::testing::Test {
   }
   std::vector<std::string> deliver_all(int* skipped, int* without_depth) {
     TumReplaySource src;
-    EXPECT_TRUE(src.open(dir_.c_str(), 640, 480, 20'000'000, 0).is_ok());
+    EXPECT_TRUE(src.open(dir_.c_str(), kWidth, kHeight, 20'000'000, 0).is_ok());
     std::vector<std::string> problems;
     *skipped = *without_depth = 0;
     for (;;) {
@@ -111,7 +111,8 @@ class BrokenSequence : public ::testing::Test {
     return problems;
   }
   static constexpr int kFrames = 8;
-  testing::SyntheticScene scene_;
+  static constexpr int kWidth = 320, kHeight = 240;
+  testing::SyntheticScene scene_ = testing::SyntheticScene::half_resolution();
   std::string dir_;
   std::vector<std::string> rgb_, depth_;
 };
@@ -150,7 +151,7 @@ TEST_F(BrokenSequence, TruncatedListFileKeepsTheGoodLines) {
   text.resize(text.size() - rgb_.back().size() - 1);
   ASSERT_TRUE(testing::write_text(dir_ + "/rgb.txt", text));
   TumReplaySource src;
-  ASSERT_TRUE(src.open(dir_.c_str(), 640, 480, 20'000'000, 0).is_ok());
+  ASSERT_TRUE(src.open(dir_.c_str(), kWidth, kHeight, 20'000'000, 0).is_ok());
   EXPECT_EQ(src.frame_count(), kFrames - 1);
   EXPECT_EQ(src.rgb_list().bad_lines, 1);
 }

@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# Installs the Debian packages rgbdtam needs. With --aarch64 it also installs the cross
+# toolchain and qemu-user, and unpacks the arm64 static libpng and zlib into .sysroot/arm64
+# (download only: the host's package set is not changed to multiarch).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+aarch64=false
+for arg in "$@"; do
+  case "$arg" in
+    --aarch64) aarch64=true ;;
+    *) echo "usage: tools/setup.sh [--aarch64]" >&2; exit 2 ;;
+  esac
+done
+
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+
+packages=(build-essential cmake libeigen3-dev libpng-dev zlib1g-dev googletest file)
+if $aarch64; then packages+=(g++-aarch64-linux-gnu qemu-user); fi
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "setup: installing ${missing[*]}"
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${missing[@]}" >/dev/null
+fi
+
+if $aarch64 && [ ! -f .sysroot/arm64/usr/lib/aarch64-linux-gnu/libpng16.a ]; then
+  echo "setup: fetching arm64 libpng and zlib into .sysroot/arm64"
+  if ! dpkg --print-foreign-architectures | grep -qx arm64; then
+    $SUDO dpkg --add-architecture arm64
+  fi
+  $SUDO apt-get update -qq
+  work=$(mktemp -d)
+  (cd "$work" && apt-get download -qq libpng-dev:arm64 libpng16-16:arm64 zlib1g-dev:arm64 zlib1g:arm64 2>/dev/null)
+  mkdir -p .sysroot/arm64
+  for deb in "$work"/*.deb; do dpkg-deb -x "$deb" .sysroot/arm64; done
+  rm -rf "$work"
+fi
+echo "setup: done"

@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# The test command: host release build with every test (the full fr1_xyz test runs where the
+# sequence exists), host debug build under ASan+UBSan, and the static aarch64 build with its
+# tests under qemu-user. The slow full-sequence test is left to the release build.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+tools/setup.sh --aarch64
+jobs=$(nproc)
+
+run() {
+  local preset=$1; shift
+  echo "=== $preset: configure and build"
+  cmake --preset "$preset" >/dev/null
+  local log
+  log=$(mktemp)
+  if ! cmake --build --preset "$preset" -j"$jobs" >"$log" 2>&1; then
+    tail -n 60 "$log"
+    exit 1
+  fi
+  echo "=== $preset: test"
+  ctest --preset "$preset" -j"$jobs" "$@"
+}
+
+run host-release
+file build/bin/rgbdtam | grep -q "statically linked" || { echo "host rgbdtam is not static" >&2; exit 1; }
+run host-debug -LE long
+run aarch64 -LE long
+file build/aarch64/bin/rgbdtam | grep -q "ARM aarch64.*statically linked" \
+  || { echo "aarch64 rgbdtam is not a static ARM binary" >&2; exit 1; }
+echo "=== static binaries"
+file build/bin/rgbdtam build/aarch64/bin/rgbdtam
