@@ -42,7 +42,14 @@ void downsample_inverse_depth(const ImageF& fine, ImageF* coarse) {
 }
 }  // namespace
 
-void FramePyramid::allocate(const PinholeIntrinsics& finest) {
+void FramePyramid::allocate(const PinholeIntrinsics& finest, double depth_factor,
+                            const DepthRange& range) {
+  constexpr int kRawValues = 1 << 16;
+  inverse_of_raw_.reset(new float[kRawValues]);
+  for (int raw = 0; raw < kRawValues; ++raw) {
+    const double z = raw / depth_factor;
+    inverse_of_raw_[raw] = (z >= range.min_m && z <= range.max_m) ? static_cast<float>(1.0 / z) : 0.f;
+  }
   RGBDTAM_ASSERT(finest.width_px % (1 << (kPyramidLevels - 1)) == 0 &&
                      finest.height_px % (1 << (kPyramidLevels - 1)) == 0,
                  "image size must be divisible by 8 for a 4-level pyramid");
@@ -58,16 +65,11 @@ void FramePyramid::build_gray() {
   for (int l = 1; l < kPyramidLevels; ++l) downsample_gray(gray_[l - 1], &gray_[l]);
 }
 
-void FramePyramid::build_inverse_depth(const ImageU16& depth, double depth_factor,
-                                       const DepthRange& range) {
-  const float scale = static_cast<float>(1.0 / depth_factor);
-  const float lo = static_cast<float>(range.min_m), hi = static_cast<float>(range.max_m);
+void FramePyramid::build_inverse_depth(const ImageU16& depth) {
   const uint16_t* src = depth.data();
   float* dst = inv_depth_[0].data();
-  for (int i = 0; i < depth.size(); ++i) {
-    const float z = src[i] * scale;
-    dst[i] = (z >= lo && z <= hi) ? 1.0f / z : 0.f;
-  }
+  const float* table = inverse_of_raw_.get();
+  for (int i = 0; i < depth.size(); ++i) dst[i] = table[src[i]];
   for (int l = 1; l < kPyramidLevels; ++l) downsample_inverse_depth(inv_depth_[l - 1], &inv_depth_[l]);
   has_depth_ = true;
 }

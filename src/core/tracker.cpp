@@ -46,34 +46,38 @@ struct Projector {
   }
 };
 
-// Symmetric 6x6 normal equations, accumulated in double for a stable sum of ~10^4 terms.
-struct NormalEquations {
-  double h[21] = {0};
-  double g[6] = {0};
-  // x is the normalised residual r / sigma and j_scale = 1 / sigma normalises J alike.
-  void add(const float J[6], double j_scale, double weight, double x) {
-    double j[6], wj[6];
-    for (int i = 0; i < 6; ++i) {
-      j[i] = j_scale * J[i];
-      wj[i] = weight * j[i];
-    }
-    int k = 0;
-    for (int i = 0; i < 6; ++i) {
-      g[i] += wj[i] * x;
-      for (int c = i; c < 6; ++c) h[k++] += wj[i] * j[c];
-    }
+// Normal equations J^T W J and J^T W r. Terms are summed in float over short blocks (which
+// vectorises) and the blocks in double, so ~10^4 terms lose no precision that matters.
+class NormalEquations {
+ public:
+  // x is the normalised residual r / sigma, and j_scale = 1 / sigma normalises J alike.
+  void add(const float J[6], float j_scale, float weight, float x) {
+    const Eigen::Matrix<float, 6, 1> j = Eigen::Map<const Eigen::Matrix<float, 6, 1>>(J) * j_scale;
+    const Eigen::Matrix<float, 6, 1> wj = weight * j;
+    block_H_.noalias() += wj * j.transpose();
+    block_g_.noalias() += wj * x;
+    if (++block_count_ == kBlock) flush();
   }
-  void write(Eigen::Matrix<double, 6, 6>* H, Vector6d* grad, double scale) const {
-    int k = 0;
-    for (int i = 0; i < 6; ++i) {
-      (*grad)[i] += scale * g[i];
-      for (int j = i; j < 6; ++j) {
-        (*H)(i, j) += scale * h[k];
-        if (i != j) (*H)(j, i) += scale * h[k];
-        ++k;
-      }
-    }
+  void write(Eigen::Matrix<double, 6, 6>* H, Vector6d* g, double scale) {
+    flush();
+    *H += scale * H_;
+    *g += scale * g_;
   }
+
+ private:
+  static constexpr int kBlock = 256;
+  void flush() {
+    H_ += block_H_.cast<double>();
+    g_ += block_g_.cast<double>();
+    block_H_.setZero();
+    block_g_.setZero();
+    block_count_ = 0;
+  }
+  Eigen::Matrix<float, 6, 6> block_H_ = Eigen::Matrix<float, 6, 6>::Zero();
+  Eigen::Matrix<float, 6, 1> block_g_ = Eigen::Matrix<float, 6, 1>::Zero();
+  Eigen::Matrix<double, 6, 6> H_ = Eigen::Matrix<double, 6, 6>::Zero();
+  Vector6d g_ = Vector6d::Zero();
+  int block_count_ = 0;
 };
 
 // Geman-McClure: rho(x) = x^2 / (2 (1 + x^2/c^2)), weight = rho'(x)/x = 1 / (1 + x^2/c^2)^2.
@@ -214,7 +218,8 @@ Tracker::LevelCost Tracker::accumulate(const FixedVector<TrackPoint>& ph,
     }
     const double x = ph_residual_[i] * inv_sigma;
     cost_ph += gm.cost(x);
-    ne_ph.add(ph[i].J, inv_sigma, gm.weight(x), x);
+    ne_ph.add(ph[i].J, static_cast<float>(inv_sigma), static_cast<float>(gm.weight(x)),
+              static_cast<float>(x));
     ++out.valid;
     if (std::fabs(x) < kInlierSigmas) ++ph_inliers;
   }
@@ -226,7 +231,8 @@ Tracker::LevelCost Tracker::accumulate(const FixedVector<TrackPoint>& ph,
     const double inv_s = 1.0 / (geo_sigma_[i] * geo_scale_);
     const double x = geo_residual_[i] * inv_s;
     cost_geo += gm.cost(x);
-    ne_geo.add(geo[i].J, inv_s, gm.weight(x), x);
+    ne_geo.add(geo[i].J, static_cast<float>(inv_s), static_cast<float>(gm.weight(x)),
+               static_cast<float>(x));
     ++out.valid;
     if (std::fabs(x) < kInlierSigmas) ++geo_inliers;
   }
@@ -239,30 +245,46 @@ Tracker::LevelCost Tracker::accumulate(const FixedVector<TrackPoint>& ph,
   return out;
 }
 
+Tracker::LevelCost Tracker::evaluate_level(const Keyframe& kf, const FramePyramid& frame,
+                                           int level, const SE3& T_c_k, bool new_scale) {
+  const FixedVector<TrackPoint>& ph = kf.photometric[level];
+  const FixedVector<TrackPoint>& geo = frame.has_depth() ? kf.geometric[level] : no_points_;
+  const PinholeIntrinsics& k = frame.intrinsics(level);
+  sample_photometric(ph, frame.gray(level), k, T_c_k);
+  estimate_gain_brightness(ph);
+  ph_residual_.clear();
+  for (int i = 0; i < ph.size(); ++i) {
+    (void)ph_residual_.push_back(
+        ph_sample_[i] == kInvalid ? 0.f : gain_ * ph_sample_[i] + brightness_ - ph[i].ref);
+  }
+  sample_geometric(geo, frame.inverse_depth(level), k, T_c_k);
+  if (new_scale) update_scales(ph.size(), geo.size());
+  return accumulate(ph, geo);
+}
+
+double Tracker::overlap_at(const Keyframe& kf, const FramePyramid& frame, const SE3& T_k_c) {
+  gain_ = 1.f;
+  brightness_ = 0.f;
+  const LevelCost c = evaluate_level(kf, frame, 0, T_k_c.inverse(), true);
+  return overlap_of(kf, c);
+}
+
+double Tracker::overlap_of(const Keyframe& kf, const LevelCost& finest) {
+  // The paper's keyframe criterion counts the photometric points when there are any.
+  const int total = kf.photometric[0].size() > 0 ? kf.photometric[0].size() : finest.total;
+  return total > 0 ? static_cast<double>(finest.inliers) / total : 0.0;
+}
+
 TrackResult Tracker::track(const Keyframe& kf, const FramePyramid& frame,
                            const SE3& T_k_c_guess) {
   TrackResult result;
   SE3 T_c_k = T_k_c_guess.inverse();
   gain_ = 1.f;
   brightness_ = 0.f;
-  const bool use_geometric = frame.has_depth();
   LevelCost finest;
   for (int level = kPyramidLevels - 1; level >= 0; --level) {
-    const FixedVector<TrackPoint>& ph = kf.photometric[level];
-    const FixedVector<TrackPoint>& geo = use_geometric ? kf.geometric[level] : no_points_;
-    const PinholeIntrinsics& k = frame.intrinsics(level);
     auto evaluate = [&](const SE3& T, bool new_scale) {
-      sample_photometric(ph, frame.gray(level), k, T);
-      estimate_gain_brightness(ph);
-      ph_residual_.clear();
-      for (int i = 0; i < ph.size(); ++i) {
-        (void)ph_residual_.push_back(ph_sample_[i] == kInvalid
-                                         ? 0.f
-                                         : gain_ * ph_sample_[i] + brightness_ - ph[i].ref);
-      }
-      sample_geometric(geo, frame.inverse_depth(level), k, T);
-      if (new_scale) update_scales(ph.size(), geo.size());
-      return accumulate(ph, geo);
+      return evaluate_level(kf, frame, level, T, new_scale);
     };
     LevelCost current = evaluate(T_c_k, true);
     // Gauss-Newton with Marquardt damping: a step that raises the cost is retried shorter
@@ -295,10 +317,7 @@ TrackResult Tracker::track(const Keyframe& kf, const FramePyramid& frame,
     if (level == 0) finest = current;
   }
   result.T_k_c = T_c_k.inverse();
-  result.overlap = finest.total > 0 ? static_cast<double>(finest.inliers) /
-                                          (kf.photometric[0].size() > 0 ? kf.photometric[0].size()
-                                                                        : finest.total)
-                                    : 0.0;
+  result.overlap = overlap_of(kf, finest);
   result.photometric_sigma = ph_sigma_;
   result.gain = gain_;
   result.brightness = brightness_;

@@ -9,7 +9,7 @@
 namespace rgbdtam {
 namespace {
 
-enum class ParamType { kReal, kFloat, kInt, kBool, kNanoseconds, kResiduals };
+enum class ParamType { kReal, kFloat, kInt, kBool, kMillisecondsAsNs, kResiduals };
 
 struct ParamSpec {
   const char* key;
@@ -42,8 +42,8 @@ const ParamSpec kSpecs[] = {
     {"depth.baseline", ParamType::kReal, 1e-3, 10, "m", "projector-camera baseline b", RGBDTAM_FIELD(sensor.baseline_m), false},
     {"depth.focal", ParamType::kReal, 1, 1e5, "px", "IR camera focal length f", RGBDTAM_FIELD(sensor.depth_focal_px), false},
     {"depth.disparity_sigma", ParamType::kReal, 1e-4, 10, "px", "disparity noise sigma_d", RGBDTAM_FIELD(sensor.disparity_sigma_px), false},
-    {"depth.max_rgb_dt", ParamType::kNanoseconds, 0, 1e9, "ns", "largest colour-depth time difference", RGBDTAM_FIELD(sensor.max_rgb_depth_dt_ns), false},
-    {"depth.time_offset", ParamType::kNanoseconds, -1e8, 1e8, "ns", "pair colour at t with depth stamped nearest t + offset", RGBDTAM_FIELD(sensor.depth_time_offset_ns), false},
+    {"depth.max_rgb_dt_ms", ParamType::kMillisecondsAsNs, 0, 1000, "ms", "largest colour-depth time difference", RGBDTAM_FIELD(sensor.max_rgb_depth_dt_ns), false},
+    {"depth.time_offset_ms", ParamType::kMillisecondsAsNs, -100, 100, "ms", "pair colour at t with the depth stamped nearest t + offset", RGBDTAM_FIELD(sensor.depth_time_offset_ns), false},
     {"tracker.residuals", ParamType::kResiduals, 0, 0, "", "PS, PD, GIDS, GIDD, GIDD*, PS+GIDD, PS+GDD, ...", RGBDTAM_FIELD(tracker.residuals), false},
     {"tracker.photometric_points", ParamType::kInt, 10, 1e6, "", "photometric points at the finest level (x1/3 per level)", RGBDTAM_FIELD(tracker.photometric_points_finest), false},
     {"tracker.gradient_top_fraction", ParamType::kFloat, 0.01, 1, "", "fraction of strongest gradients eligible as points", RGBDTAM_FIELD(tracker.gradient_top_fraction), false},
@@ -133,8 +133,8 @@ Status assign(const ParamSpec& spec, const char* value, const char* where, Param
       }
       *static_cast<int*>(field) = static_cast<int>(v);
       break;
-    case ParamType::kNanoseconds:
-      *static_cast<int64_t*>(field) = static_cast<int64_t>(v);
+    case ParamType::kMillisecondsAsNs:
+      *static_cast<int64_t*>(field) = static_cast<int64_t>(std::llround(v * 1e6));
       break;
     default:
       break;
@@ -244,9 +244,9 @@ void print_params(const Params& in, char* buf, int size) {
       case ParamType::kInt:
         std::snprintf(value, sizeof(value), "%d", *static_cast<int*>(f));
         break;
-      case ParamType::kNanoseconds:
-        std::snprintf(value, sizeof(value), "%lld",
-                      static_cast<long long>(*static_cast<int64_t*>(f)));
+      case ParamType::kMillisecondsAsNs:
+        std::snprintf(value, sizeof(value), "%.6f",
+                      static_cast<double>(*static_cast<int64_t*>(f)) * 1e-6);
         break;
       case ParamType::kReal:
         std::snprintf(value, sizeof(value), "%.9g", *static_cast<double*>(f));

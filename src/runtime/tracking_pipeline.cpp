@@ -6,7 +6,7 @@ Status TrackingPipeline::init(const Params& params) {
   params_ = params;
   params_.tracker.inverse_depth_sigma = params.sensor.inverse_depth_sigma();
   undistorter_.init(params_.camera, params_.distortion);
-  pyramid_.allocate(params_.camera);
+  pyramid_.allocate(params_.camera, params_.sensor.depth_factor, params_.sensor.depth_range);
   depth_undistorted_.allocate(params_.camera.width_px, params_.camera.height_px);
   builder_.allocate(params_.camera, params_.tracker);
   pool_.allocate(params_.keyframe_pool_size, builder_);
@@ -50,17 +50,23 @@ bool TrackingPipeline::reuse_keyframe(const SE3& T_w_c, PoseEstimate* out) {
       scores[pos] = score;
     }
   }
+  // Rank the candidates by their overlap at the current estimate; track only the best.
   Keyframe* best = nullptr;
-  TrackResult best_result;
+  double best_overlap = params_.tracker.keyframe_overlap;
   for (int i = 0; i < count; ++i) {
-    const TrackResult r = tracker_.track(*candidates[i], pyramid_, candidates[i]->T_w_k.inverse() * T_w_c);
-    if (r.state == TrackingState::kOk && r.overlap >= params_.tracker.keyframe_overlap &&
-        (best == nullptr || r.overlap > best_result.overlap)) {
+    const double overlap =
+        tracker_.overlap_at(*candidates[i], pyramid_, candidates[i]->T_w_k.inverse() * T_w_c);
+    if (overlap >= best_overlap) {
       best = candidates[i];
-      best_result = r;
+      best_overlap = overlap;
     }
   }
   if (best == nullptr) return false;
+  const TrackResult best_result = tracker_.track(*best, pyramid_, best->T_w_k.inverse() * T_w_c);
+  if (best_result.state != TrackingState::kOk ||
+      best_result.overlap < params_.tracker.keyframe_overlap) {
+    return false;
+  }
   reference_ = best;
   out->T_w_c = best->T_w_k * best_result.T_k_c;
   out->keyframe_id = best->id;
@@ -95,8 +101,7 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
   pyramid_.build_gray();
   if (frame.depth != nullptr) {
     undistorter_.undistort_depth(frame.depth, &depth_undistorted_);
-    pyramid_.build_inverse_depth(depth_undistorted_, params_.sensor.depth_factor,
-                                 params_.sensor.depth_range);
+    pyramid_.build_inverse_depth(depth_undistorted_);
   } else {
     pyramid_.clear_depth();
     out.flags |= kNoDepth;

@@ -80,7 +80,7 @@ TEST(Undistorter, IdentityWithoutDistortionAndNearestForDepth) {
 TEST(Pyramid, IntrinsicsFollowPixelCentres) {
   // A 3-D point projects to level l at (u0 - 0.5(2^l - 1)) / 2^l, the 2x2-average convention.
   FramePyramid p;
-  p.allocate(kK);
+  p.allocate(kK, 5000.0, DepthRange());
   const Vector3d X(0.2, -0.1, 1.5);
   const double u0 = kK.fx_px * X.x() / X.z() + kK.cx_px;
   for (int l = 0; l < kPyramidLevels; ++l) {

@@ -13,7 +13,7 @@ const PinholeIntrinsics kK{500, 500, 319.5, 239.5, 640, 480};
 
 TEST(Pyramid, GrayLevelsAreTwoByTwoAverages) {
   FramePyramid p;
-  p.allocate(kK);
+  p.allocate(kK, 5000.0, DepthRange());
   ImageF& g = p.gray(0);
   for (int y = 0; y < 480; ++y)
     for (int x = 0; x < 640; ++x) g.at(x, y) = static_cast<float>((x * 7 + y * 13) % 256) / 255.f;
@@ -32,7 +32,7 @@ TEST(Pyramid, GrayLevelsAreTwoByTwoAverages) {
 
 TEST(Pyramid, InverseDepthRangeAndEdges) {
   FramePyramid p;
-  p.allocate(kK);
+  p.allocate(kK, 5000.0, DepthRange{0.3, 5.0});
   ImageU16 depth;
   depth.allocate(640, 480);
   // Left half at 1 m, right half at 2 m, a strip of no measurement, a strip too far.
@@ -43,7 +43,7 @@ TEST(Pyramid, InverseDepthRangeAndEdges) {
       if (y >= 464) d = 60000;  // 12 m, beyond depth.max
       depth.at(x, y) = d;
     }
-  p.build_inverse_depth(depth, 5000.0, DepthRange{0.3, 5.0});
+  p.build_inverse_depth(depth);
   ASSERT_TRUE(p.has_depth());
   EXPECT_FLOAT_EQ(p.inverse_depth(0).at(10, 100), 1.0f);
   EXPECT_FLOAT_EQ(p.inverse_depth(0).at(600, 100), 0.5f);

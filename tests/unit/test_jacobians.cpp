@@ -20,7 +20,7 @@ struct Fixture {
     EXPECT_TRUE(ResidualConfig::parse(residuals, &opt.residuals));
     // Depth gradients change little on smooth planes; the box edge is excluded by the builder.
     const testing::SyntheticFrame f = scene.render(SE3());
-    pyramid.allocate(scene.camera);
+    pyramid.allocate(scene.camera, scene.depth_factor, DepthRange{0.1, 10.0});
     Undistorter u;
     u.init(scene.camera, RadTanDistortion());
     u.undistort_gray(f.gray.data(), &pyramid.gray(0));
@@ -28,7 +28,7 @@ struct Fixture {
     ImageU16 depth;
     depth.allocate(scene.camera.width_px, scene.camera.height_px);
     for (int i = 0; i < depth.size(); ++i) depth.data()[i] = f.depth[static_cast<size_t>(i)];
-    pyramid.build_inverse_depth(depth, scene.depth_factor, DepthRange{0.1, 10.0});
+    pyramid.build_inverse_depth(depth);
     builder.allocate(scene.camera, opt);
     builder.allocate_keyframe(&kf);
     builder.build(pyramid, 0, 0, SE3(), &kf);

@@ -33,7 +33,7 @@ TEST(Params, ShippedConfigsLoad) {
 TEST(Params, ValuesAndDefaults) {
   Params p;
   ASSERT_TRUE(parse(std::string(kMinimal) + "tracker.residuals = GIDD*  # comment\n"
-                    "tracker.motion_model = false\ndepth.max_rgb_dt = 1.5e7\n",
+                    "tracker.motion_model = false\ndepth.max_rgb_dt_ms = 15\n",
                     &p)
                   .is_ok());
   EXPECT_EQ(p.camera.fx_px, 500.0);

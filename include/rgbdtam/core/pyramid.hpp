@@ -15,13 +15,14 @@ struct DepthRange {
 
 class FramePyramid {
  public:
-  void allocate(const PinholeIntrinsics& finest);
+  // Init time: the images, and the raw-depth -> inverse-depth table of the sensor.
+  void allocate(const PinholeIntrinsics& finest, double depth_factor, const DepthRange& range);
 
   // gray[0] must already hold the undistorted [0,1] image; this builds the coarser levels.
   void build_gray();
   // Converts undistorted raw depth (units of 1/depth_factor m) to inverse depth and builds
   // the coarser levels. A pixel outside the range is invalid (0).
-  void build_inverse_depth(const ImageU16& depth, double depth_factor, const DepthRange& range);
+  void build_inverse_depth(const ImageU16& depth);
   void clear_depth();
 
   const PinholeIntrinsics& intrinsics(int level) const { return k_[level]; }
@@ -34,6 +35,7 @@ class FramePyramid {
   PinholeIntrinsics k_[kPyramidLevels];
   ImageF gray_[kPyramidLevels];
   ImageF inv_depth_[kPyramidLevels];  // 1/m; 0 = no measurement
+  std::unique_ptr<float[]> inverse_of_raw_;  // 65536 entries, 0 outside the valid range
   bool has_depth_ = false;
 };
 

@@ -85,6 +85,9 @@ class Tracker {
  public:
   void allocate(const Keyframe& capacity_model, const TrackerOptions& opt);
   TrackResult track(const Keyframe& kf, const FramePyramid& frame, const SE3& T_k_c_guess);
+  // The overlap at a given pose without optimising: one finest-level evaluation, cheap enough
+  // to rank several keyframes.
+  double overlap_at(const Keyframe& kf, const FramePyramid& frame, const SE3& T_k_c);
 
  private:
   struct LevelCost {
@@ -95,6 +98,9 @@ class Tracker {
     Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
     Vector6d g = Vector6d::Zero();
   };
+  LevelCost evaluate_level(const Keyframe& kf, const FramePyramid& frame, int level,
+                           const SE3& T_c_k, bool new_scale);
+  static double overlap_of(const Keyframe& kf, const LevelCost& finest);
   void sample_photometric(const FixedVector<TrackPoint>& pts, const ImageF& img,
                           const PinholeIntrinsics& k, const SE3& T_c_k);
   void sample_geometric(const FixedVector<TrackPoint>& pts, const ImageF& inv_depth,
