@@ -16,6 +16,9 @@ Params synthetic_params(const testing::SyntheticScene& scene, const char* residu
   p.sensor.depth_factor = scene.depth_factor;
   p.sensor.depth_range.max_m = 10.0;
   EXPECT_TRUE(ResidualConfig::parse(residuals, &p.tracker.residuals));
+  // The synthetic sensor is exact, so its disparity noise is the matcher's own 0.1 px, not the
+  // effective 0.4 px that covers a real Kinect's registration and timing errors.
+  p.sensor.disparity_sigma_px = 0.1;
   return p;
 }
 

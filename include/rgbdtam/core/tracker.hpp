@@ -20,7 +20,9 @@ struct TrackerOptions {
   float gradient_top_fraction = 0.4f;    // photometric points keep the strongest 40 % gradients
   float canny_low = 20.f;                // Sobel-3 magnitude, 8-bit grey levels
   float canny_high = 60.f;
-  int max_iterations[kPyramidLevels] = {6, 8, 10, 15};  // finest first
+  // Finest first. Four at the two finest levels, as the authors' real-time mode: 0.88 cm
+  // all-frames ATE on fr1_xyz at 6.8 ms median, against 0.84 cm at 8.1 ms with {6, 8}.
+  int max_iterations[kPyramidLevels] = {4, 4, 10, 15};
   double min_relative_decrease = 1e-3;   // stop a level when the cost improves less than this
   double robust_c = 2.0;                 // Geman-McClure scale, in standard deviations
   double geometric_weight = 1.0;         // lambda on the normalised geometric term
