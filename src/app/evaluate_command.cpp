@@ -23,11 +23,12 @@ EvaluationReport evaluate_all(const std::vector<StampedPose>& gt,
 
 void print_report(const EvaluationReport& r, bool json, const char* label) {
   if (json) {
-    std::printf("{\"poses_compared\": %d, \"ate_rmse_cm\": %.4f, \"ate_mean_cm\": %.4f, "
-                "\"ate_median_cm\": %.4f, \"ate_max_cm\": %.4f, \"rpe_pairs\": %d, "
-                "\"rpe_trans_rmse_cm_per_s\": %.4f, \"rpe_rot_rmse_deg_per_s\": %.4f",
-                r.ate.compared, r.ate.rmse_m * 100, r.ate.mean_m * 100, r.ate.median_m * 100,
-                r.ate.max_m * 100, r.rpe.compared, r.rpe.trans_rmse_m * 100, r.rpe.rot_rmse_deg);
+    std::printf(
+        "{\"poses_compared\": %d, \"ate_rmse_cm\": %.4f, \"ate_mean_cm\": %.4f, "
+        "\"ate_median_cm\": %.4f, \"ate_max_cm\": %.4f, \"rpe_pairs\": %d, "
+        "\"rpe_trans_rmse_cm_per_s\": %.4f, \"rpe_rot_rmse_deg_per_s\": %.4f",
+        r.ate.compared, r.ate.rmse_m * 100, r.ate.mean_m * 100, r.ate.median_m * 100,
+        r.ate.max_m * 100, r.rpe.compared, r.rpe.trans_rmse_m * 100, r.rpe.rot_rmse_deg);
     if (r.has_coverage) {
       std::printf(", \"coverage\": %.4f, \"frames_with_gt\": %d, \"frames_estimated\": %d",
                   r.coverage.fraction(), r.coverage.frames, r.coverage.estimated);
@@ -39,13 +40,14 @@ void print_report(const EvaluationReport& r, bool json, const char* label) {
     std::printf("ATE: fewer than 2 poses associate with the ground truth\n");
     return;
   }
-  std::printf("ATE (%s): RMSE %.2f cm, mean %.2f, median %.2f, max %.2f cm over %d poses\n",
-              label, r.ate.rmse_m * 100, r.ate.mean_m * 100, r.ate.median_m * 100,
-              r.ate.max_m * 100, r.ate.compared);
+  std::printf("ATE (%s): RMSE %.2f cm, mean %.2f, median %.2f, max %.2f cm over %d poses\n", label,
+              r.ate.rmse_m * 100, r.ate.mean_m * 100, r.ate.median_m * 100, r.ate.max_m * 100,
+              r.ate.compared);
   if (r.rpe_ok) {
-    std::printf("RPE (delta 1 s): translation RMSE %.2f cm/s, rotation RMSE %.3f deg/s over %d "
-                "pairs\n",
-                r.rpe.trans_rmse_m * 100, r.rpe.rot_rmse_deg, r.rpe.compared);
+    std::printf(
+        "RPE (delta 1 s): translation RMSE %.2f cm/s, rotation RMSE %.3f deg/s over %d "
+        "pairs\n",
+        r.rpe.trans_rmse_m * 100, r.rpe.rot_rmse_deg, r.rpe.compared);
   }
   if (r.has_coverage) {
     std::printf("coverage: %.1f %% (%d of %d frames with ground truth)\n",
@@ -83,15 +85,16 @@ int evaluate_command(int argc, char** argv) {
   }
   std::vector<StampedPose> gt, est;
   int bad_gt = 0, bad_est = 0;
-  for (auto [path, traj, bad] : {std::make_tuple(gt_path, &gt, &bad_gt),
-                                 std::make_tuple(est_path, &est, &bad_est)}) {
+  for (auto [path, traj, bad] :
+       {std::make_tuple(gt_path, &gt, &bad_gt), std::make_tuple(est_path, &est, &bad_est)}) {
     const Status s = read_tum_trajectory(path, traj, bad);
     if (!s.is_ok()) {
       std::fprintf(stderr, "rgbdtam eval: %s\n", s.message());
       return 1;
     }
   }
-  if (bad_est > 0) std::fprintf(stderr, "rgbdtam eval: skipped %d unreadable lines in %s\n", bad_est, est_path);
+  if (bad_est > 0)
+    std::fprintf(stderr, "rgbdtam eval: skipped %d unreadable lines in %s\n", bad_est, est_path);
   // Coverage counts against the sequence's frame list: rgb.txt beside the ground truth.
   std::string frames = frames_path != nullptr ? frames_path : "";
   if (frames.empty()) {

@@ -85,16 +85,17 @@ void ReplayJob::print_summary() const {
               source_.frame_count(), residuals);
   std::printf("frames: read %u, skipped %u, without depth %u; tracked %u, lost %u, resets %u\n",
               rc.delivered, rc.skipped, rc.without_depth, c.tracked, c.lost, c.resets);
-  std::printf("keyframes: %u created, %u reused, pool %d of %d, %d recycled\n", c.keyframes, c.reused,
-              pipeline_.keyframes().size(), pipeline_.keyframes().capacity(),
+  std::printf("keyframes: %u created, %u reused, pool %d of %d, %d recycled\n", c.keyframes,
+              c.reused, pipeline_.keyframes().size(), pipeline_.keyframes().capacity(),
               pipeline_.keyframes().recycled());
   std::printf("tracking ms/frame: median %.2f, p95 %.2f, max %.2f\n",
               tracking_ms_.percentile_ms(0.5), tracking_ms_.percentile_ms(0.95),
               tracking_ms_.max_ms());
-  std::printf("whole frame ms (decode + tracking + output): median %.2f, p95 %.2f; %.1f fps "
-              "overall\n",
-              frame_ms_.percentile_ms(0.5), frame_ms_.percentile_ms(0.95),
-              seconds > 0 ? static_cast<double>(processed_) / seconds : 0.0);
+  std::printf(
+      "whole frame ms (decode + tracking + output): median %.2f, p95 %.2f; %.1f fps "
+      "overall\n",
+      frame_ms_.percentile_ms(0.5), frame_ms_.percentile_ms(0.95),
+      seconds > 0 ? static_cast<double>(processed_) / seconds : 0.0);
 }
 
 }  // namespace rgbdtam
@@ -105,16 +106,16 @@ void ReplayJob::print_json(const EvaluationReport& r) const {
   const TrackingCounters& c = pipeline_.counters();
   char residuals[16];
   options_.params.tracker.residuals.name(residuals, sizeof(residuals));
-  std::printf("{\"sequence\": \"%s\", \"residuals\": \"%s\", \"frames\": %u, \"tracked\": %u, "
-              "\"lost\": %u, \"keyframes\": %u, \"reused\": %u, \"track_median_ms\": %.3f, "
-              "\"track_p95_ms\": %.3f, \"frame_median_ms\": %.3f, \"ate_ok\": %s, "
-              "\"ate_rmse_cm\": %.4f, \"poses_compared\": %d, \"rpe_trans_cm_s\": %.4f, "
-              "\"rpe_rot_deg_s\": %.4f, \"coverage\": %.4f}\n",
-              options_.sequence, residuals, c.frames, c.tracked, c.lost, c.keyframes, c.reused,
-              tracking_ms_.percentile_ms(0.5), tracking_ms_.percentile_ms(0.95),
-              frame_ms_.percentile_ms(0.5), r.ate_ok ? "true" : "false", r.ate.rmse_m * 100,
-              r.ate.compared, r.rpe.trans_rmse_m * 100, r.rpe.rot_rmse_deg,
-              r.has_coverage ? r.coverage.fraction() : 0.0);
+  std::printf(
+      "{\"sequence\": \"%s\", \"residuals\": \"%s\", \"frames\": %u, \"tracked\": %u, "
+      "\"lost\": %u, \"keyframes\": %u, \"reused\": %u, \"track_median_ms\": %.3f, "
+      "\"track_p95_ms\": %.3f, \"frame_median_ms\": %.3f, \"ate_ok\": %s, "
+      "\"ate_rmse_cm\": %.4f, \"poses_compared\": %d, \"rpe_trans_cm_s\": %.4f, "
+      "\"rpe_rot_deg_s\": %.4f, \"coverage\": %.4f}\n",
+      options_.sequence, residuals, c.frames, c.tracked, c.lost, c.keyframes, c.reused,
+      tracking_ms_.percentile_ms(0.5), tracking_ms_.percentile_ms(0.95),
+      frame_ms_.percentile_ms(0.5), r.ate_ok ? "true" : "false", r.ate.rmse_m * 100, r.ate.compared,
+      r.rpe.trans_rmse_m * 100, r.rpe.rot_rmse_deg, r.has_coverage ? r.coverage.fraction() : 0.0);
 }
 
 }  // namespace rgbdtam

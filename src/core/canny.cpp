@@ -47,10 +47,22 @@ int CannyDetector::detect(const ImageF& gray, float low, float high, ImageU8* ed
       if (m < low) continue;
       int dx = 1, dy = 0;
       switch (sector_.at(x, y)) {
-        case 0: dx = 1; dy = 0; break;
-        case 1: dx = 1; dy = 1; break;
-        case 2: dx = 0; dy = 1; break;
-        default: dx = -1; dy = 1; break;
+        case 0:
+          dx = 1;
+          dy = 0;
+          break;
+        case 1:
+          dx = 1;
+          dy = 1;
+          break;
+        case 2:
+          dx = 0;
+          dy = 1;
+          break;
+        default:
+          dx = -1;
+          dy = 1;
+          break;
       }
       const float a = magnitude_.at(x + dx, y + dy), b = magnitude_.at(x - dx, y - dy);
       if (m > a && m >= b) {

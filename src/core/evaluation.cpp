@@ -57,7 +57,8 @@ std::vector<std::pair<int, int>> associate(const std::vector<double>& first,
     for (; it != second.end(); ++it) {
       const double diff = std::fabs(first[a] - (*it + offset));
       if (*it + offset > first[a] + max_difference) break;
-      if (diff < max_difference) candidates.push_back({diff, a, static_cast<int>(it - second.begin())});
+      if (diff < max_difference)
+        candidates.push_back({diff, a, static_cast<int>(it - second.begin())});
     }
   }
   // Python's sort is stable on (diff, a, b) tuples.
@@ -129,7 +130,8 @@ bool evaluate_rpe(const std::vector<StampedPose>& gt, const std::vector<StampedP
   }
   // The benchmark subsamples beyond 10000 pairs with Python's RNG; sequences here stay below.
   std::vector<double> gt_intervals;
-  for (size_t i = 1; i < stamps_gt.size(); ++i) gt_intervals.push_back(stamps_gt[i] - stamps_gt[i - 1]);
+  for (size_t i = 1; i < stamps_gt.size(); ++i)
+    gt_intervals.push_back(stamps_gt[i] - stamps_gt[i - 1]);
   const double max_dt = 2.0 * median_of(gt_intervals);
   std::vector<double> trans, rot;
   for (const auto& [i, j] : pairs) {

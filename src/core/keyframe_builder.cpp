@@ -113,7 +113,8 @@ void KeyframeBuilder::build(const FramePyramid& frame, uint32_t id, int64_t time
     const int n = gx_[l].size();
     for (int i = 0; i < n; ++i) {
       const float g = std::fabs(gx_[l].data()[i]) + std::fabs(gy_[l].data()[i]);
-      const int bin = std::min(kHistogramBins - 1, static_cast<int>(g / kMaxGradient * kHistogramBins));
+      const int bin =
+          std::min(kHistogramBins - 1, static_cast<int>(g / kMaxGradient * kHistogramBins));
       ++histogram[bin];
     }
     const int wanted = static_cast<int>(opt_.gradient_top_fraction * static_cast<float>(n));

@@ -48,7 +48,8 @@ void FramePyramid::allocate(const PinholeIntrinsics& finest, double depth_factor
   inverse_of_raw_.reset(new float[kRawValues]);
   for (int raw = 0; raw < kRawValues; ++raw) {
     const double z = raw / depth_factor;
-    inverse_of_raw_[raw] = (z >= range.min_m && z <= range.max_m) ? static_cast<float>(1.0 / z) : 0.f;
+    inverse_of_raw_[raw] =
+        (z >= range.min_m && z <= range.max_m) ? static_cast<float>(1.0 / z) : 0.f;
   }
   RGBDTAM_ASSERT(finest.width_px % (1 << (kPyramidLevels - 1)) == 0 &&
                      finest.height_px % (1 << (kPyramidLevels - 1)) == 0,
@@ -70,7 +71,8 @@ void FramePyramid::build_inverse_depth(const ImageU16& depth) {
   float* dst = inv_depth_[0].data();
   const float* table = inverse_of_raw_.get();
   for (int i = 0; i < depth.size(); ++i) dst[i] = table[src[i]];
-  for (int l = 1; l < kPyramidLevels; ++l) downsample_inverse_depth(inv_depth_[l - 1], &inv_depth_[l]);
+  for (int l = 1; l < kPyramidLevels; ++l)
+    downsample_inverse_depth(inv_depth_[l - 1], &inv_depth_[l]);
   has_depth_ = true;
 }
 
@@ -79,7 +81,10 @@ void FramePyramid::clear_depth() {
   has_depth_ = false;
 }
 
-void compute_gradients(const ImageF& img, ImageF* gx, ImageF* gy) {
+namespace {
+// Central differences; a difference whose two samples are not both `usable` is left at 0.
+template <typename Usable>
+void central_differences(const ImageF& img, ImageF* gx, ImageF* gy, Usable usable) {
   const int w = img.width(), h = img.height();
   gx->fill(0.f);
   gy->fill(0.f);
@@ -90,27 +95,19 @@ void compute_gradients(const ImageF& img, ImageF* gx, ImageF* gy) {
     float* ox = gx->row(y);
     float* oy = gy->row(y);
     for (int x = 1; x < w - 1; ++x) {
-      ox[x] = 0.5f * (r[x + 1] - r[x - 1]);
-      oy[x] = 0.5f * (down[x] - up[x]);
+      if (usable(r[x - 1], r[x + 1])) ox[x] = 0.5f * (r[x + 1] - r[x - 1]);
+      if (usable(up[x], down[x])) oy[x] = 0.5f * (down[x] - up[x]);
     }
   }
 }
+}  // namespace
 
-void compute_depth_gradients(const ImageF& d, ImageF* gx, ImageF* gy) {
-  const int w = d.width(), h = d.height();
-  gx->fill(0.f);
-  gy->fill(0.f);
-  for (int y = 1; y < h - 1; ++y) {
-    const float* r = d.row(y);
-    const float* up = d.row(y - 1);
-    const float* down = d.row(y + 1);
-    float* ox = gx->row(y);
-    float* oy = gy->row(y);
-    for (int x = 1; x < w - 1; ++x) {
-      if (r[x - 1] > 0.f && r[x + 1] > 0.f) ox[x] = 0.5f * (r[x + 1] - r[x - 1]);
-      if (up[x] > 0.f && down[x] > 0.f) oy[x] = 0.5f * (down[x] - up[x]);
-    }
-  }
+void compute_gradients(const ImageF& img, ImageF* gx, ImageF* gy) {
+  central_differences(img, gx, gy, [](float, float) { return true; });
+}
+
+void compute_depth_gradients(const ImageF& inv_depth, ImageF* gx, ImageF* gy) {
+  central_differences(inv_depth, gx, gy, [](float a, float b) { return a > 0.f && b > 0.f; });
 }
 
 }  // namespace rgbdtam

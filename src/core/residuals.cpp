@@ -69,10 +69,10 @@ void ResidualConfig::name(char* buf, int size) const {
   const char* g = geometric == GeometricMode::kInverseDepth ? "GID"
                   : geometric == GeometricMode::kDepth      ? "GD"
                                                             : "";
-  const char* s = geometric == GeometricMode::kOff                ? ""
-                  : sampling == GeometricSampling::kSemiDense     ? "S"
-                  : sampling == GeometricSampling::kSubsampled    ? "D"
-                                                                  : "D*";
+  const char* s = geometric == GeometricMode::kOff             ? ""
+                  : sampling == GeometricSampling::kSemiDense  ? "S"
+                  : sampling == GeometricSampling::kSubsampled ? "D"
+                                                               : "D*";
   const char* sep = (*p != '\0' && *g != '\0') ? "+" : "";
   std::snprintf(buf, static_cast<size_t>(size), "%s%s%s%s", p, sep, g, s);
 }

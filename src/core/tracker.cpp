@@ -7,7 +7,7 @@
 
 namespace rgbdtam {
 namespace {
-constexpr float kInvalid = -1.f;    // marks a point that projects outside or has no data
+constexpr float kInvalid = -1.f;  // marks a point that projects outside or has no data
 constexpr float kMinDepthM = 0.05f;
 constexpr float kMadToSigma = 1.4826f;
 constexpr float kMinPhotometricSigma = 1.f / 255.f;
@@ -240,13 +240,12 @@ Tracker::LevelCost Tracker::accumulate(const FixedVector<TrackPoint>& ph,
   ne_geo.write(&out.H, &out.g, opt_.geometric_weight);
   out.cost = cost_ph + opt_.geometric_weight * cost_geo;
   out.total = ph.size() + geo.size();
-  // Overlap is the paper's keyframe criterion: the photometric points when there are any.
   out.inliers = ph.size() > 0 ? ph_inliers : geo_inliers;
   return out;
 }
 
-Tracker::LevelCost Tracker::evaluate_level(const Keyframe& kf, const FramePyramid& frame,
-                                           int level, const SE3& T_c_k, bool new_scale) {
+Tracker::LevelCost Tracker::evaluate_level(const Keyframe& kf, const FramePyramid& frame, int level,
+                                           const SE3& T_c_k, bool new_scale) {
   const FixedVector<TrackPoint>& ph = kf.photometric[level];
   const FixedVector<TrackPoint>& geo = frame.has_depth() ? kf.geometric[level] : no_points_;
   const PinholeIntrinsics& k = frame.intrinsics(level);
@@ -275,18 +274,14 @@ double Tracker::overlap_of(const Keyframe& kf, const LevelCost& finest) {
   return total > 0 ? static_cast<double>(finest.inliers) / total : 0.0;
 }
 
-TrackResult Tracker::track(const Keyframe& kf, const FramePyramid& frame,
-                           const SE3& T_k_c_guess) {
+TrackResult Tracker::track(const Keyframe& kf, const FramePyramid& frame, const SE3& T_k_c_guess) {
   TrackResult result;
   SE3 T_c_k = T_k_c_guess.inverse();
   gain_ = 1.f;
   brightness_ = 0.f;
   LevelCost finest;
   for (int level = kPyramidLevels - 1; level >= 0; --level) {
-    auto evaluate = [&](const SE3& T, bool new_scale) {
-      return evaluate_level(kf, frame, level, T, new_scale);
-    };
-    LevelCost current = evaluate(T_c_k, true);
+    LevelCost current = evaluate_level(kf, frame, level, T_c_k, true);
     // Gauss-Newton with Marquardt damping: a step that raises the cost is retried shorter
     // instead of ending the level, since the keyframe-side Jacobians are approximate far
     // from the keyframe.
@@ -299,7 +294,7 @@ TrackResult Tracker::track(const Keyframe& kf, const FramePyramid& frame,
       if (!delta.allFinite()) break;
       const SE3 T_new = T_c_k * SE3::exp(-delta);
       const float gain = gain_, brightness = brightness_;
-      LevelCost next = evaluate(T_new, false);
+      LevelCost next = evaluate_level(kf, frame, level, T_new, false);
       ++result.iterations;
       if (next.cost >= current.cost) {
         gain_ = gain;

@@ -12,8 +12,8 @@ namespace rgbdtam {
 Status read_file(const char* path, uint8_t* buf, size_t capacity, size_t* size) {
   const int fd = ::open(path, O_RDONLY | O_CLOEXEC);
   if (fd < 0) {
-    return Status::error(errno == ENOENT ? StatusCode::kNotFound : StatusCode::kIoError,
-                         "%s: %s", path, std::strerror(errno));
+    return Status::error(errno == ENOENT ? StatusCode::kNotFound : StatusCode::kIoError, "%s: %s",
+                         path, std::strerror(errno));
   }
   size_t total = 0;
   for (;;) {
@@ -22,8 +22,8 @@ Status read_file(const char* path, uint8_t* buf, size_t capacity, size_t* size) 
       const ssize_t extra = ::read(fd, &probe, 1);
       ::close(fd);
       if (extra > 0) {
-        return Status::error(StatusCode::kOutOfRange, "%s: larger than the %zu-byte buffer",
-                             path, capacity);
+        return Status::error(StatusCode::kOutOfRange, "%s: larger than the %zu-byte buffer", path,
+                             capacity);
       }
       break;
     }

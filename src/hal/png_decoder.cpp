@@ -69,8 +69,8 @@ Status PngDecoder::decode_gray16(const uint8_t* png, size_t size, int width, int
   return decode(png, size, width, height, 16, out);
 }
 
-Status PngDecoder::decode(const uint8_t* data, size_t size, int width, int height,
-                          int bit_depth, void* out) {
+Status PngDecoder::decode(const uint8_t* data, size_t size, int width, int height, int bit_depth,
+                          void* out) {
   if (size < 8 || png_sig_cmp(data, 0, 8) != 0) {
     return Status::error(StatusCode::kCorrupt, "not a PNG file");
   }
@@ -93,8 +93,8 @@ Status PngDecoder::decode(const uint8_t* data, size_t size, int width, int heigh
   const int color = png_get_color_type(png, info);
   if (w != width || h != height) {
     png_destroy_read_struct(&png, &info, nullptr);
-    return Status::error(StatusCode::kInvalidArgument, "PNG is %dx%d, expected %dx%d", w, h,
-                         width, height);
+    return Status::error(StatusCode::kInvalidArgument, "PNG is %dx%d, expected %dx%d", w, h, width,
+                         height);
   }
   if (png_get_interlace_type(png, info) != PNG_INTERLACE_NONE) {
     png_destroy_read_struct(&png, &info, nullptr);

@@ -42,9 +42,8 @@ Status parse_tum_list(const char* text, const char* source, TumList* out) {
       if (after == nullptr || (*after != ' ' && *after != '\t' && *after != ',') || len == 0 ||
           len >= sizeof(e.path)) {
         if (out->bad_lines++ == 0) {
-          out->first_problem = Status::error(StatusCode::kCorrupt,
-                                             "%s:%d: expected 'timestamp filename'", source,
-                                             line_no);
+          out->first_problem = Status::error(
+              StatusCode::kCorrupt, "%s:%d: expected 'timestamp filename'", source, line_no);
         }
       } else {
         std::memcpy(e.path, name, len);
@@ -54,18 +53,17 @@ Status parse_tum_list(const char* text, const char* source, TumList* out) {
     }
     line = nl != nullptr ? nl + 1 : end;
   }
-  std::stable_sort(out->entries.get(), out->entries.get() + out->size,
-                   [](const TumListEntry& a, const TumListEntry& b) {
-                     return a.timestamp_ns < b.timestamp_ns;
-                   });
+  std::stable_sort(
+      out->entries.get(), out->entries.get() + out->size,
+      [](const TumListEntry& a, const TumListEntry& b) { return a.timestamp_ns < b.timestamp_ns; });
   if (out->size == 0) {
     return Status::error(StatusCode::kCorrupt, "%s: no 'timestamp filename' entries", source);
   }
   return Status::ok();
 }
 
-Status TumReplaySource::open(const char* folder, int width, int height,
-                             int64_t max_rgb_depth_dt_ns, int64_t depth_time_offset_ns) {
+Status TumReplaySource::open(const char* folder, int width, int height, int64_t max_rgb_depth_dt_ns,
+                             int64_t depth_time_offset_ns) {
   if (std::strlen(folder) >= sizeof(folder_) - 200) {
     return Status::error(StatusCode::kInvalidArgument, "sequence path too long: %s", folder);
   }
@@ -86,9 +84,8 @@ Status TumReplaySource::open(const char* folder, int width, int height,
   int j = 0;
   for (int i = 0; i < rgb_.size; ++i) {
     const int64_t t = rgb_.entries[i].timestamp_ns + depth_time_offset_ns;
-    while (j + 1 < depth_.size &&
-           std::llabs(depth_.entries[j + 1].timestamp_ns - t) <=
-               std::llabs(depth_.entries[j].timestamp_ns - t)) {
+    while (j + 1 < depth_.size && std::llabs(depth_.entries[j + 1].timestamp_ns - t) <=
+                                      std::llabs(depth_.entries[j].timestamp_ns - t)) {
       ++j;
     }
     const bool close = std::llabs(depth_.entries[j].timestamp_ns - t) < max_rgb_depth_dt_ns;
@@ -109,10 +106,10 @@ Status TumReplaySource::load(const TumListEntry& e, bool depth, void* out) {
   std::snprintf(path, sizeof(path), "%s/%s", folder_, e.path);
   size_t size = 0;
   RGBDTAM_RETURN_IF_ERROR(read_file(path, file_buf_.get(), file_capacity_, &size));
-  const Status s = depth ? png_.decode_gray16(file_buf_.get(), size, width_, height_,
-                                              static_cast<uint16_t*>(out))
-                         : png_.decode_gray8(file_buf_.get(), size, width_, height_,
-                                             static_cast<uint8_t*>(out));
+  const Status s =
+      depth
+          ? png_.decode_gray16(file_buf_.get(), size, width_, height_, static_cast<uint16_t*>(out))
+          : png_.decode_gray8(file_buf_.get(), size, width_, height_, static_cast<uint8_t*>(out));
   if (!s.is_ok()) return Status::error(s.code(), "%s: %s", path, s.message());
   return Status::ok();
 }

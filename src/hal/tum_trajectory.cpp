@@ -6,8 +6,8 @@
 #include <cstring>
 
 #include "rgbdtam/hal/file.hpp"
-#include "rgbdtam/hal/tum_timestamp.hpp"
 #include "rgbdtam/hal/tum_replay_source.hpp"
+#include "rgbdtam/hal/tum_timestamp.hpp"
 
 namespace rgbdtam {
 namespace {
@@ -46,8 +46,9 @@ Status read_tum_trajectory(const char* path, std::vector<StampedPose>* out, int*
     line = nl != nullptr ? nl + 1 : line + std::strlen(line);
   }
   delete[] text;
-  std::stable_sort(out->begin(), out->end(),
-                   [](const StampedPose& a, const StampedPose& b) { return a.stamp_s < b.stamp_s; });
+  std::stable_sort(out->begin(), out->end(), [](const StampedPose& a, const StampedPose& b) {
+    return a.stamp_s < b.stamp_s;
+  });
   if (out->empty()) return Status::error(StatusCode::kCorrupt, "%s: no poses", path);
   return Status::ok();
 }

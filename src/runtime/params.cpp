@@ -25,43 +25,87 @@ struct ParamSpec {
 
 // The schema. Keys are stable: a removed key keeps its line as a comment.
 const ParamSpec kSpecs[] = {
-    {"camera.width", ParamType::kInt, 8, 4096, "px", "image width, divisible by 8", RGBDTAM_FIELD(camera.width_px), true},
-    {"camera.height", ParamType::kInt, 8, 4096, "px", "image height, divisible by 8", RGBDTAM_FIELD(camera.height_px), true},
-    {"camera.fx", ParamType::kReal, 1, 1e5, "px", "focal length x", RGBDTAM_FIELD(camera.fx_px), true},
-    {"camera.fy", ParamType::kReal, 1, 1e5, "px", "focal length y", RGBDTAM_FIELD(camera.fy_px), true},
-    {"camera.cx", ParamType::kReal, -1e4, 1e4, "px", "principal point x", RGBDTAM_FIELD(camera.cx_px), true},
-    {"camera.cy", ParamType::kReal, -1e4, 1e4, "px", "principal point y", RGBDTAM_FIELD(camera.cy_px), true},
-    {"camera.k1", ParamType::kReal, -10, 10, "", "radial distortion k1", RGBDTAM_FIELD(distortion.k1), false},
-    {"camera.k2", ParamType::kReal, -10, 10, "", "radial distortion k2", RGBDTAM_FIELD(distortion.k2), false},
-    {"camera.p1", ParamType::kReal, -1, 1, "", "tangential distortion p1", RGBDTAM_FIELD(distortion.p1), false},
-    {"camera.p2", ParamType::kReal, -1, 1, "", "tangential distortion p2", RGBDTAM_FIELD(distortion.p2), false},
-    {"camera.k3", ParamType::kReal, -10, 10, "", "radial distortion k3", RGBDTAM_FIELD(distortion.k3), false},
-    {"depth.factor", ParamType::kReal, 1e-3, 1e6, "1/m", "raw depth units per metre", RGBDTAM_FIELD(sensor.depth_factor), true},
-    {"depth.min", ParamType::kReal, 0.0, 100, "m", "nearest valid sensor depth", RGBDTAM_FIELD(sensor.depth_range.min_m), false},
-    {"depth.max", ParamType::kReal, 0.1, 100, "m", "farthest valid sensor depth", RGBDTAM_FIELD(sensor.depth_range.max_m), false},
-    {"depth.baseline", ParamType::kReal, 1e-3, 10, "m", "projector-camera baseline b", RGBDTAM_FIELD(sensor.baseline_m), false},
-    {"depth.focal", ParamType::kReal, 1, 1e5, "px", "IR camera focal length f", RGBDTAM_FIELD(sensor.depth_focal_px), false},
-    {"depth.disparity_sigma", ParamType::kReal, 1e-4, 10, "px", "disparity noise sigma_d", RGBDTAM_FIELD(sensor.disparity_sigma_px), false},
-    {"depth.max_rgb_dt_ms", ParamType::kMillisecondsAsNs, 0, 1000, "ms", "largest colour-depth time difference", RGBDTAM_FIELD(sensor.max_rgb_depth_dt_ns), false},
-    {"depth.time_offset_ms", ParamType::kMillisecondsAsNs, -100, 100, "ms", "pair colour at t with the depth stamped nearest t + offset", RGBDTAM_FIELD(sensor.depth_time_offset_ns), false},
-    {"tracker.residuals", ParamType::kResiduals, 0, 0, "", "PS, PD, GIDS, GIDD, GIDD*, PS+GIDD, PS+GDD, ...", RGBDTAM_FIELD(tracker.residuals), false},
-    {"tracker.photometric_points", ParamType::kInt, 10, 1e6, "", "photometric points at the finest level (x1/3 per level)", RGBDTAM_FIELD(tracker.photometric_points_finest), false},
-    {"tracker.gradient_top_fraction", ParamType::kFloat, 0.01, 1, "", "fraction of strongest gradients eligible as points", RGBDTAM_FIELD(tracker.gradient_top_fraction), false},
-    {"tracker.canny_low", ParamType::kFloat, 1, 2000, "grey/px", "Canny low threshold (Sobel-3 magnitude)", RGBDTAM_FIELD(tracker.canny_low), false},
-    {"tracker.canny_high", ParamType::kFloat, 1, 2000, "grey/px", "Canny high threshold", RGBDTAM_FIELD(tracker.canny_high), false},
-    {"tracker.iterations_l0", ParamType::kInt, 0, 100, "", "Gauss-Newton iterations at 640x480", RGBDTAM_FIELD(tracker.max_iterations[0]), false},
-    {"tracker.iterations_l1", ParamType::kInt, 0, 100, "", "Gauss-Newton iterations at 320x240", RGBDTAM_FIELD(tracker.max_iterations[1]), false},
-    {"tracker.iterations_l2", ParamType::kInt, 0, 100, "", "Gauss-Newton iterations at 160x120", RGBDTAM_FIELD(tracker.max_iterations[2]), false},
-    {"tracker.iterations_l3", ParamType::kInt, 0, 100, "", "Gauss-Newton iterations at 80x60", RGBDTAM_FIELD(tracker.max_iterations[3]), false},
-    {"tracker.min_relative_decrease", ParamType::kReal, 0, 1, "", "stop a level below this relative cost decrease", RGBDTAM_FIELD(tracker.min_relative_decrease), false},
-    {"tracker.robust_c", ParamType::kReal, 0.1, 100, "sigma", "Geman-McClure scale", RGBDTAM_FIELD(tracker.robust_c), false},
-    {"tracker.geometric_weight", ParamType::kReal, 0, 1000, "", "lambda on the normalised geometric error", RGBDTAM_FIELD(tracker.geometric_weight), false},
-    {"tracker.keyframe_overlap", ParamType::kReal, 0, 1, "", "new keyframe below this overlap", RGBDTAM_FIELD(tracker.keyframe_overlap), false},
-    {"tracker.gain_brightness", ParamType::kBool, 0, 1, "", "estimate gain and brightness", RGBDTAM_FIELD(tracker.gain_brightness), false},
-    {"tracker.motion_model", ParamType::kBool, 0, 1, "", "constant-velocity initial guess", RGBDTAM_FIELD(tracker.motion_model), false},
-    {"map.keyframe_pool", ParamType::kInt, 2, 4096, "", "keyframes kept; when full the oldest non-reference one is recycled", RGBDTAM_FIELD(keyframe_pool_size), false},
-    {"map.reuse_candidates", ParamType::kInt, 0, 16, "", "nearest earlier keyframes tried before creating a new one (0: no map reuse)", RGBDTAM_FIELD(reuse_candidates), false},
-    {"tracker.lost_frames_before_reset", ParamType::kInt, 1, 100000, "frames", "consecutive lost frames before a new keyframe restarts tracking", RGBDTAM_FIELD(lost_frames_before_reset), false},
+    {"camera.width", ParamType::kInt, 8, 4096, "px", "image width, divisible by 8",
+     RGBDTAM_FIELD(camera.width_px), true},
+    {"camera.height", ParamType::kInt, 8, 4096, "px", "image height, divisible by 8",
+     RGBDTAM_FIELD(camera.height_px), true},
+    {"camera.fx", ParamType::kReal, 1, 1e5, "px", "focal length x", RGBDTAM_FIELD(camera.fx_px),
+     true},
+    {"camera.fy", ParamType::kReal, 1, 1e5, "px", "focal length y", RGBDTAM_FIELD(camera.fy_px),
+     true},
+    {"camera.cx", ParamType::kReal, -1e4, 1e4, "px", "principal point x",
+     RGBDTAM_FIELD(camera.cx_px), true},
+    {"camera.cy", ParamType::kReal, -1e4, 1e4, "px", "principal point y",
+     RGBDTAM_FIELD(camera.cy_px), true},
+    {"camera.k1", ParamType::kReal, -10, 10, "", "radial distortion k1",
+     RGBDTAM_FIELD(distortion.k1), false},
+    {"camera.k2", ParamType::kReal, -10, 10, "", "radial distortion k2",
+     RGBDTAM_FIELD(distortion.k2), false},
+    {"camera.p1", ParamType::kReal, -1, 1, "", "tangential distortion p1",
+     RGBDTAM_FIELD(distortion.p1), false},
+    {"camera.p2", ParamType::kReal, -1, 1, "", "tangential distortion p2",
+     RGBDTAM_FIELD(distortion.p2), false},
+    {"camera.k3", ParamType::kReal, -10, 10, "", "radial distortion k3",
+     RGBDTAM_FIELD(distortion.k3), false},
+    {"depth.factor", ParamType::kReal, 1e-3, 1e6, "1/m", "raw depth units per metre",
+     RGBDTAM_FIELD(sensor.depth_factor), true},
+    {"depth.min", ParamType::kReal, 0.0, 100, "m", "nearest valid sensor depth",
+     RGBDTAM_FIELD(sensor.depth_range.min_m), false},
+    {"depth.max", ParamType::kReal, 0.1, 100, "m", "farthest valid sensor depth",
+     RGBDTAM_FIELD(sensor.depth_range.max_m), false},
+    {"depth.baseline", ParamType::kReal, 1e-3, 10, "m", "projector-camera baseline b",
+     RGBDTAM_FIELD(sensor.baseline_m), false},
+    {"depth.focal", ParamType::kReal, 1, 1e5, "px", "IR camera focal length f",
+     RGBDTAM_FIELD(sensor.depth_focal_px), false},
+    {"depth.disparity_sigma", ParamType::kReal, 1e-4, 10, "px", "disparity noise sigma_d",
+     RGBDTAM_FIELD(sensor.disparity_sigma_px), false},
+    {"depth.max_rgb_dt_ms", ParamType::kMillisecondsAsNs, 0, 1000, "ms",
+     "largest colour-depth time difference", RGBDTAM_FIELD(sensor.max_rgb_depth_dt_ns), false},
+    {"depth.time_offset_ms", ParamType::kMillisecondsAsNs, -100, 100, "ms",
+     "pair colour at t with the depth stamped nearest t + offset",
+     RGBDTAM_FIELD(sensor.depth_time_offset_ns), false},
+    {"tracker.residuals", ParamType::kResiduals, 0, 0, "",
+     "PS, PD, GIDS, GIDD, GIDD*, PS+GIDD, PS+GDD, ...", RGBDTAM_FIELD(tracker.residuals), false},
+    {"tracker.photometric_points", ParamType::kInt, 10, 1e6, "",
+     "photometric points at the finest level (x1/3 per level)",
+     RGBDTAM_FIELD(tracker.photometric_points_finest), false},
+    {"tracker.gradient_top_fraction", ParamType::kFloat, 0.01, 1, "",
+     "fraction of strongest gradients eligible as points",
+     RGBDTAM_FIELD(tracker.gradient_top_fraction), false},
+    {"tracker.canny_low", ParamType::kFloat, 1, 2000, "grey/px",
+     "Canny low threshold (Sobel-3 magnitude)", RGBDTAM_FIELD(tracker.canny_low), false},
+    {"tracker.canny_high", ParamType::kFloat, 1, 2000, "grey/px", "Canny high threshold",
+     RGBDTAM_FIELD(tracker.canny_high), false},
+    {"tracker.iterations_l0", ParamType::kInt, 0, 100, "", "Gauss-Newton iterations at 640x480",
+     RGBDTAM_FIELD(tracker.max_iterations[0]), false},
+    {"tracker.iterations_l1", ParamType::kInt, 0, 100, "", "Gauss-Newton iterations at 320x240",
+     RGBDTAM_FIELD(tracker.max_iterations[1]), false},
+    {"tracker.iterations_l2", ParamType::kInt, 0, 100, "", "Gauss-Newton iterations at 160x120",
+     RGBDTAM_FIELD(tracker.max_iterations[2]), false},
+    {"tracker.iterations_l3", ParamType::kInt, 0, 100, "", "Gauss-Newton iterations at 80x60",
+     RGBDTAM_FIELD(tracker.max_iterations[3]), false},
+    {"tracker.min_relative_decrease", ParamType::kReal, 0, 1, "",
+     "stop a level below this relative cost decrease", RGBDTAM_FIELD(tracker.min_relative_decrease),
+     false},
+    {"tracker.robust_c", ParamType::kReal, 0.1, 100, "sigma", "Geman-McClure scale",
+     RGBDTAM_FIELD(tracker.robust_c), false},
+    {"tracker.geometric_weight", ParamType::kReal, 0, 1000, "",
+     "lambda on the normalised geometric error", RGBDTAM_FIELD(tracker.geometric_weight), false},
+    {"tracker.keyframe_overlap", ParamType::kReal, 0, 1, "", "new keyframe below this overlap",
+     RGBDTAM_FIELD(tracker.keyframe_overlap), false},
+    {"tracker.gain_brightness", ParamType::kBool, 0, 1, "", "estimate gain and brightness",
+     RGBDTAM_FIELD(tracker.gain_brightness), false},
+    {"tracker.motion_model", ParamType::kBool, 0, 1, "", "constant-velocity initial guess",
+     RGBDTAM_FIELD(tracker.motion_model), false},
+    {"map.keyframe_pool", ParamType::kInt, 2, 4096, "",
+     "keyframes kept; when full the oldest non-reference one is recycled",
+     RGBDTAM_FIELD(keyframe_pool_size), false},
+    {"map.reuse_candidates", ParamType::kInt, 0, 16, "",
+     "nearest earlier keyframes tried before creating a new one (0: no map reuse)",
+     RGBDTAM_FIELD(reuse_candidates), false},
+    {"tracker.lost_frames_before_reset", ParamType::kInt, 1, 100000, "frames",
+     "consecutive lost frames before a new keyframe restarts tracking",
+     RGBDTAM_FIELD(lost_frames_before_reset), false},
 };
 #undef RGBDTAM_FIELD
 
@@ -83,7 +127,8 @@ char* trim(char* s) {
 
 Status assign(const ParamSpec& spec, const char* value, const char* where, Params* p) {
   if (*value == '\0') {
-    return Status::error(StatusCode::kInvalidArgument, "%s: key '%s' has no value", where, spec.key);
+    return Status::error(StatusCode::kInvalidArgument, "%s: key '%s' has no value", where,
+                         spec.key);
   }
   void* field = spec.field(*p);
   if (spec.type == ParamType::kResiduals) {
@@ -101,8 +146,8 @@ Status assign(const ParamSpec& spec, const char* value, const char* where, Param
     } else if (std::strcmp(value, "false") == 0 || std::strcmp(value, "0") == 0) {
       b = false;
     } else {
-      return Status::error(StatusCode::kInvalidArgument,
-                           "%s: key '%s': '%s' is not true/false", where, spec.key, value);
+      return Status::error(StatusCode::kInvalidArgument, "%s: key '%s': '%s' is not true/false",
+                           where, spec.key, value);
     }
     *static_cast<bool*>(field) = b;
     return Status::ok();
@@ -111,8 +156,8 @@ Status assign(const ParamSpec& spec, const char* value, const char* where, Param
   char* end = nullptr;
   const double v = std::strtod(value, &end);
   if (end == value || *trim(end) != '\0' || errno != 0 || !std::isfinite(v)) {
-    return Status::error(StatusCode::kInvalidArgument, "%s: key '%s': '%s' is not a number",
-                         where, spec.key, value);
+    return Status::error(StatusCode::kInvalidArgument, "%s: key '%s': '%s' is not a number", where,
+                         spec.key, value);
   }
   if (v < spec.min || v > spec.max) {
     return Status::error(StatusCode::kInvalidArgument,

@@ -1,5 +1,7 @@
 #include "rgbdtam/runtime/tracking_pipeline.hpp"
 
+#include <algorithm>
+
 namespace rgbdtam {
 
 Status TrackingPipeline::init(const Params& params) {
@@ -24,31 +26,32 @@ SE3 TrackingPipeline::predict_pose() const {
 }
 
 bool TrackingPipeline::reuse_keyframe(const SE3& T_w_c, PoseEstimate* out) {
-  // Nearest earlier keyframes by camera distance, a radian of rotation counted as 0.3 m.
+  // The earlier keyframes nearest to the camera, a radian of rotation counted as 0.3 m.
   constexpr int kMaxCandidates = 16;
   constexpr double kMetresPerRadian = 0.3;
+  auto distance = [&](const Keyframe& kf) {
+    const SE3 d = kf.T_w_k.inverse() * T_w_c;
+    return d.translation().norm() + kMetresPerRadian * so3_log(d.quaternion()).norm();
+  };
   Keyframe* candidates[kMaxCandidates];
-  double scores[kMaxCandidates];
   int count = 0;
-  const int wanted = params_.reuse_candidates < kMaxCandidates ? params_.reuse_candidates
-                                                               : kMaxCandidates;
-  for (int i = 0; i < pool_.size(); ++i) {
-    Keyframe* kf = &pool_.at(i);
-    if (kf == reference_) continue;
-    const SE3 d = kf->T_w_k.inverse() * T_w_c;
-    const double score = d.translation().norm() + kMetresPerRadian * so3_log(d.quaternion()).norm();
-    int pos = count < wanted ? count++ : wanted;
-    while (pos > 0 && scores[pos - 1] > score) {
-      if (pos < wanted) {
-        candidates[pos] = candidates[pos - 1];
-        scores[pos] = scores[pos - 1];
+  const int wanted = std::min(params_.reuse_candidates, kMaxCandidates);
+  while (count < wanted) {
+    Keyframe* nearest = nullptr;
+    double nearest_distance = 0.0;
+    for (int i = 0; i < pool_.size(); ++i) {
+      Keyframe* kf = &pool_.at(i);
+      if (kf == reference_ || std::find(candidates, candidates + count, kf) != candidates + count) {
+        continue;
       }
-      --pos;
+      const double d = distance(*kf);
+      if (nearest == nullptr || d < nearest_distance) {
+        nearest = kf;
+        nearest_distance = d;
+      }
     }
-    if (pos < wanted) {
-      candidates[pos] = kf;
-      scores[pos] = score;
-    }
+    if (nearest == nullptr) break;
+    candidates[count++] = nearest;
   }
   // Rank the candidates by their overlap at the current estimate; track only the best.
   Keyframe* best = nullptr;
@@ -94,9 +97,9 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
   out.timestamp_ns = frame.timestamp_ns;
   out.information.setZero();
   ++counters_.frames;
-  RGBDTAM_ASSERT(frame.width_px == params_.camera.width_px &&
-                     frame.height_px == params_.camera.height_px,
-                 "sensor frame size differs from the configured camera");
+  RGBDTAM_ASSERT(
+      frame.width_px == params_.camera.width_px && frame.height_px == params_.camera.height_px,
+      "sensor frame size differs from the configured camera");
   undistorter_.undistort_gray(frame.gray, &pyramid_.gray(0));
   pyramid_.build_gray();
   if (frame.depth != nullptr) {

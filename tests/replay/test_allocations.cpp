@@ -115,8 +115,9 @@ TEST(Allocations, NoneWhileReplayingTheClipAfterInit) {
   EXPECT_EQ(job.counters().tracked, 50u);
   EXPECT_GT(job.counters().keyframes, 1u) << "keyframe creation must be part of the counted run";
   EXPECT_EQ(g_calls.load(), 0) << g_bytes.load() << " bytes allocated after init";
-  std::printf("allocations after init over %d frames: %ld (%ld bytes); PNG arena high water %zu B\n",
-              frames, g_calls.load(), g_bytes.load(), job.source().png_arena_high_water());
+  std::printf(
+      "allocations after init over %d frames: %ld (%ld bytes); PNG arena high water %zu B\n",
+      frames, g_calls.load(), g_bytes.load(), job.source().png_arena_high_water());
 }
 
 }  // namespace

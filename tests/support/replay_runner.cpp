@@ -16,7 +16,8 @@ ReplayOutcome replay_and_evaluate(const std::string& sequence, const std::string
   const Status s = parse_params(text, config.c_str(), &opt.params);
   delete[] text;
   if (!s.is_ok()) return out;
-  if (override_assignment != nullptr && !set_param(override_assignment, "test", &opt.params).is_ok()) {
+  if (override_assignment != nullptr &&
+      !set_param(override_assignment, "test", &opt.params).is_ok()) {
     return out;
   }
   ReplayJob job;

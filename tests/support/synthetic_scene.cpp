@@ -32,23 +32,26 @@ double texture(double u, double v, double phase) {
 std::vector<Plane> scene_planes(bool with_box) {
   std::vector<Plane> planes;
   auto add = [&](Vector3d n, double d, Vector3d ua, Vector3d va, Vector3d lo, Vector3d hi,
-                 double phase) { planes.push_back({n, d, ua, va, lo, hi, phase}); };
+                 double phase) {
+    planes.push_back({n, d, ua, va, lo, hi, phase});
+  };
   const double inf = 1e9;
   const Vector3d X(1, 0, 0), Y(0, 1, 0), Z(0, 0, 1);
-  add(-Z, -3.0, X, Y, Vector3d(-inf, -inf, 2.99), Vector3d(inf, inf, 3.01), 0.0);     // back wall
-  add(-Y, -0.7, X, Z, Vector3d(-inf, 0.69, -inf), Vector3d(inf, 0.71, inf), 1.0);     // floor
-  add(X, -1.3, Z, Y, Vector3d(-1.31, -inf, -inf), Vector3d(-1.29, inf, inf), 2.0);    // left wall
-  add(-X, -1.5, Z, Y, Vector3d(1.49, -inf, -inf), Vector3d(1.51, inf, inf), 5.0);     // right wall
+  add(-Z, -3.0, X, Y, Vector3d(-inf, -inf, 2.99), Vector3d(inf, inf, 3.01), 0.0);   // back wall
+  add(-Y, -0.7, X, Z, Vector3d(-inf, 0.69, -inf), Vector3d(inf, 0.71, inf), 1.0);   // floor
+  add(X, -1.3, Z, Y, Vector3d(-1.31, -inf, -inf), Vector3d(-1.29, inf, inf), 2.0);  // left wall
+  add(-X, -1.5, Z, Y, Vector3d(1.49, -inf, -inf), Vector3d(1.51, inf, inf), 5.0);   // right wall
   if (with_box) {
-    add(-Z, -1.6, X, Y, Vector3d(-0.5, -0.2, 1.59), Vector3d(0.1, 0.4, 1.61), 3.0);   // box front
-    add(X, 0.1, Z, Y, Vector3d(0.09, -0.2, 1.6), Vector3d(0.11, 0.4, 2.2), 4.0);      // box side
+    add(-Z, -1.6, X, Y, Vector3d(-0.5, -0.2, 1.59), Vector3d(0.1, 0.4, 1.61), 3.0);  // box front
+    add(X, 0.1, Z, Y, Vector3d(0.09, -0.2, 1.6), Vector3d(0.11, 0.4, 2.2), 4.0);     // box side
   }
   return planes;
 }
 }  // namespace
 
 SE3 SyntheticScene::pose_at(double t) {
-  const Vector3d p(0.10 * std::sin(0.9 * t), 0.05 * std::sin(1.7 * t), 0.08 * (1.0 - std::cos(0.6 * t)));
+  const Vector3d p(0.10 * std::sin(0.9 * t), 0.05 * std::sin(1.7 * t),
+                   0.08 * (1.0 - std::cos(0.6 * t)));
   const Vector3d w(0.03 * std::sin(1.1 * t), 0.05 * std::sin(0.7 * t), 0.02 * std::sin(1.3 * t));
   return SE3(so3_exp(w), p);
 }

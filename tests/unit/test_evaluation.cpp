@@ -75,7 +75,8 @@ TEST(Rpe, ZeroForRigidCopyAndMatchesAKnownDrift) {
   EXPECT_LT(r.rot_rmse_deg, 1e-6);
   // On a rotation-free path, a drift of 2 cm per 0.1 s along x is 20 cm per second.
   std::vector<StampedPose> line;
-  for (int i = 0; i < 60; ++i) line.push_back({10.0 + 0.1 * i, SE3(Eigen::Quaterniond::Identity(), Vector3d(0, 0, 0.05 * i))});
+  for (int i = 0; i < 60; ++i)
+    line.push_back({10.0 + 0.1 * i, SE3(Eigen::Quaterniond::Identity(), Vector3d(0, 0, 0.05 * i))});
   est = line;
   for (size_t i = 0; i < est.size(); ++i) {
     est[i].T_w_c = est[i].T_w_c * SE3(Eigen::Quaterniond::Identity(), Vector3d(0.02 * i, 0, 0));

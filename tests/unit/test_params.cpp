@@ -15,7 +15,9 @@ const char* kMinimal =
     "camera.width = 640\ncamera.height = 480\ncamera.fx = 500\ncamera.fy = 500\n"
     "camera.cx = 320\ncamera.cy = 240\ndepth.factor = 1000\n";
 
-Status parse(const std::string& text, Params* p) { return parse_params(text.c_str(), "test.conf", p); }
+Status parse(const std::string& text, Params* p) {
+  return parse_params(text.c_str(), "test.conf", p);
+}
 
 TEST(Params, ShippedConfigsLoad) {
   for (const char* name : {"config/tum_fr1.conf", "config/tum_fr2.conf", "config/tum_fr3.conf",
@@ -32,8 +34,9 @@ TEST(Params, ShippedConfigsLoad) {
 
 TEST(Params, ValuesAndDefaults) {
   Params p;
-  ASSERT_TRUE(parse(std::string(kMinimal) + "tracker.residuals = GIDD*  # comment\n"
-                    "tracker.motion_model = false\ndepth.max_rgb_dt_ms = 15\n",
+  ASSERT_TRUE(parse(std::string(kMinimal) +
+                        "tracker.residuals = GIDD*  # comment\n"
+                        "tracker.motion_model = false\ndepth.max_rgb_dt_ms = 15\n",
                     &p)
                   .is_ok());
   EXPECT_EQ(p.camera.fx_px, 500.0);
@@ -57,9 +60,11 @@ void expect_error(const std::string& text, const char* must_contain) {
 }
 
 TEST(Params, BadValuesNameTheFileAndTheKey) {
-  expect_error(std::string(kMinimal) + "tracker.robust_cc = 2\n", "unknown key 'tracker.robust_cc'");
+  expect_error(std::string(kMinimal) + "tracker.robust_cc = 2\n",
+               "unknown key 'tracker.robust_cc'");
   expect_error(std::string(kMinimal) + "camera.fx =\n", "'camera.fx' has no value");
-  expect_error(std::string(kMinimal) + "tracker.keyframe_overlap = 1.5\n", "'tracker.keyframe_overlap'");
+  expect_error(std::string(kMinimal) + "tracker.keyframe_overlap = 1.5\n",
+               "'tracker.keyframe_overlap'");
   expect_error(std::string(kMinimal) + "tracker.keyframe_overlap = 1.5\n", "out of range");
   expect_error(std::string(kMinimal) + "camera.fx = five hundred\n", "is not a number");
   expect_error(std::string(kMinimal) + "map.keyframe_pool = 3.5\n", "not a whole number");

@@ -60,7 +60,8 @@ TEST(PngDecoder, ColourBecomesBt601GreyAndBadFilesAreErrors) {
   std::vector<uint8_t> gray(16 * 8);
   ASSERT_TRUE(png.decode_gray8(file.data(), size, 16, 8, gray.data()).is_ok());
   for (int i = 0; i < 16 * 8; ++i) {
-    const int expect = (299 * rgb[3 * i] + 587 * rgb[3 * i + 1] + 114 * rgb[3 * i + 2] + 500) / 1000;
+    const int expect =
+        (299 * rgb[3 * i] + 587 * rgb[3 * i + 1] + 114 * rgb[3 * i + 2] + 500) / 1000;
     EXPECT_EQ(gray[static_cast<size_t>(i)], expect);
   }
   EXPECT_FALSE(png.decode_gray8(file.data(), size, 17, 8, gray.data()).is_ok()) << "wrong size";

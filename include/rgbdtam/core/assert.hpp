@@ -12,7 +12,7 @@ AssertHandler set_assert_handler(AssertHandler handler);
 
 }  // namespace rgbdtam
 
-#define RGBDTAM_ASSERT(expr, msg)                                              \
-  do {                                                                         \
-    if (!(expr)) ::rgbdtam::assert_failed(#expr, (msg), __FILE__, __LINE__);   \
+#define RGBDTAM_ASSERT(expr, msg)                                            \
+  do {                                                                       \
+    if (!(expr)) ::rgbdtam::assert_failed(#expr, (msg), __FILE__, __LINE__); \
   } while (0)

@@ -20,8 +20,8 @@ struct PinholeIntrinsics {
   // Intrinsics of the next-coarser level of a 2x2-averaging pyramid: pixel centres
   // move by half a pixel, so c' = (c - 0.5) / 2.
   PinholeIntrinsics half() const {
-    return {fx_px * 0.5, fy_px * 0.5, (cx_px - 0.5) * 0.5, (cy_px - 0.5) * 0.5, width_px / 2,
-            height_px / 2};
+    return {fx_px * 0.5,         fy_px * 0.5,  (cx_px - 0.5) * 0.5,
+            (cy_px - 0.5) * 0.5, width_px / 2, height_px / 2};
   }
 };
 

@@ -17,8 +17,8 @@ struct StampedPose {
 
 // Pairs (index into first, index into second), sorted by the first's stamp.
 std::vector<std::pair<int, int>> associate(const std::vector<double>& first,
-                                           const std::vector<double>& second,
-                                           double offset_s = 0.0, double max_difference_s = 0.02);
+                                           const std::vector<double>& second, double offset_s = 0.0,
+                                           double max_difference_s = 0.02);
 
 struct AteResult {
   int compared = 0;
@@ -45,7 +45,6 @@ struct Coverage {
   double fraction() const { return frames > 0 ? static_cast<double>(estimated) / frames : 0.0; }
 };
 Coverage evaluate_coverage(const std::vector<double>& frame_stamps,
-                           const std::vector<StampedPose>& gt,
-                           const std::vector<StampedPose>& est);
+                           const std::vector<StampedPose>& gt, const std::vector<StampedPose>& est);
 
 }  // namespace rgbdtam

@@ -34,7 +34,7 @@ class FramePyramid {
  private:
   PinholeIntrinsics k_[kPyramidLevels];
   ImageF gray_[kPyramidLevels];
-  ImageF inv_depth_[kPyramidLevels];  // 1/m; 0 = no measurement
+  ImageF inv_depth_[kPyramidLevels];         // 1/m; 0 = no measurement
   std::unique_ptr<float[]> inverse_of_raw_;  // 65536 entries, 0 outside the valid range
   bool has_depth_ = false;
 };

@@ -23,11 +23,11 @@ struct TrackerOptions {
   // Finest first. Four at the two finest levels, as the authors' real-time mode: 0.88 cm
   // all-frames ATE on fr1_xyz at 6.8 ms median, against 0.84 cm at 8.1 ms with {6, 8}.
   int max_iterations[kPyramidLevels] = {4, 4, 10, 15};
-  double min_relative_decrease = 1e-3;   // stop a level when the cost improves less than this
-  double robust_c = 2.0;                 // Geman-McClure scale, in standard deviations
-  double geometric_weight = 1.0;         // lambda on the normalised geometric term
-  double inverse_depth_sigma = 0.0023;   // sigma_rho = sigma_d / (f b), 1/m
-  double keyframe_overlap = 0.85;        // new keyframe below this inlier overlap
+  double min_relative_decrease = 1e-3;  // stop a level when the cost improves less than this
+  double robust_c = 2.0;                // Geman-McClure scale, in standard deviations
+  double geometric_weight = 1.0;        // lambda on the normalised geometric term
+  double inverse_depth_sigma = 0.0023;  // sigma_rho = sigma_d / (f b), 1/m
+  double keyframe_overlap = 0.85;       // new keyframe below this inlier overlap
   bool gain_brightness = true;
   bool motion_model = true;
 };
@@ -79,8 +79,9 @@ struct TrackResult {
   double photometric_sigma = 0;  // robust scale of the finest level, intensity units
   double gain = 1.0, brightness = 0.0;
   int iterations = 0;
-  int residuals_used = 0;                   // finest level, valid photometric + geometric
-  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();  // finest J^T W J
+  int residuals_used = 0;  // finest level, valid photometric + geometric
+  // Finest-level J^T W J of the perturbation delta in T_c_k exp(-delta), (v, omega).
+  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
 };
 
 class Tracker {
@@ -115,7 +116,8 @@ class Tracker {
   TrackerOptions opt_;
   // Per-point scratch, indexed like the keyframe's point sets.
   const FixedVector<TrackPoint> no_points_;  // stands in for the geometric set without depth
-  FixedVector<float> ph_sample_, ph_residual_, geo_residual_, geo_sigma_, scratch_;  // scratch: max(ph, geo)
+  FixedVector<float> ph_sample_, ph_residual_, geo_residual_, geo_sigma_,
+      scratch_;  // scratch: max(ph, geo)
   float gain_ = 1.f, brightness_ = 0.f, ph_sigma_ = 0.05f;
   float geo_scale_ = 1.f;  // >= 1: geometric spread in sensor standard deviations
 };

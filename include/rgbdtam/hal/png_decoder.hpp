@@ -25,8 +25,7 @@ class PngDecoder {
   void* arena_alloc(size_t n);
 
  private:
-  Status decode(const uint8_t* png, size_t size, int width, int height, int bit_depth,
-                void* out);
+  Status decode(const uint8_t* png, size_t size, int width, int height, int bit_depth, void* out);
   std::unique_ptr<uint8_t[]> arena_;
   std::unique_ptr<uint8_t[]> row_;
   size_t arena_size_ = 0;

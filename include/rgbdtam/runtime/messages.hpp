@@ -12,24 +12,24 @@ namespace rgbdtam {
 // tracker on the same thread. The pixel buffers belong to the source and stay valid until
 // its next frame.
 struct SensorFrame {
-  uint32_t sequence = 0;             // index in the source, counting skipped frames
-  int64_t timestamp_ns = 0;          // colour exposure
-  int64_t depth_timestamp_ns = 0;    // 0 when there is no depth for this frame
-  const uint8_t* gray = nullptr;     // width*height, 8-bit grey, distorted (raw)
-  const uint16_t* depth = nullptr;   // width*height raw depth registered to colour, or null
+  uint32_t sequence = 0;            // index in the source, counting skipped frames
+  int64_t timestamp_ns = 0;         // colour exposure
+  int64_t depth_timestamp_ns = 0;   // 0 when there is no depth for this frame
+  const uint8_t* gray = nullptr;    // width*height, 8-bit grey, distorted (raw)
+  const uint16_t* depth = nullptr;  // width*height raw depth registered to colour, or null
   int width_px = 0;
   int height_px = 0;
 };
 
 // Estimator health bits in PoseEstimate::flags.
 enum PoseFlags : uint32_t {
-  kPoseValid = 1u << 0,      // T_w_c holds an estimate for this frame
-  kNewKeyframe = 1u << 1,    // this frame became the tracking reference
-  kNoDepth = 1u << 2,        // tracked with the photometric term only
-  kLost = 1u << 3,           // tracking failed on this frame
-  kReset = 1u << 4,          // estimate restarted (jump); see reset_counter
-  kNotInitialised = 1u << 5, // no keyframe yet (waiting for a frame with depth)
-  kKeyframeReused = 1u << 6, // an earlier keyframe became the reference again (map reuse)
+  kPoseValid = 1u << 0,       // T_w_c holds an estimate for this frame
+  kNewKeyframe = 1u << 1,     // this frame became the tracking reference
+  kNoDepth = 1u << 2,         // tracked with the photometric term only
+  kLost = 1u << 3,            // tracking failed on this frame
+  kReset = 1u << 4,           // estimate restarted (jump); see reset_counter
+  kNotInitialised = 1u << 5,  // no keyframe yet (waiting for a frame with depth)
+  kKeyframeReused = 1u << 6,  // an earlier keyframe became the reference again (map reuse)
 };
 
 // Pipeline -> trajectory writer, link. One per input frame.
@@ -44,7 +44,9 @@ struct PoseEstimate {
   float photometric_sigma = 0.f;  // intensity units [0,1]
   int32_t residuals_used = 0;
   int32_t iterations = 0;
-  Eigen::Matrix<double, 6, 6> information;  // finest-level J^T W J in the camera frame, (v, omega)
+  // Finest-level J^T W J of the tracker's keyframe-side perturbation, (v, omega); zero when
+  // the pose is not valid.
+  Eigen::Matrix<double, 6, 6> information;
 };
 
 }  // namespace rgbdtam

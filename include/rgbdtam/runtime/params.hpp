@@ -13,11 +13,11 @@
 namespace rgbdtam {
 
 struct SensorModel {
-  double depth_factor = 5000.0;      // raw depth units per metre
-  DepthRange depth_range;            // valid sensor depth, m
-  double baseline_m = 0.075;         // projector-camera baseline
-  double depth_focal_px = 580.0;     // focal length of the IR camera
-  double disparity_sigma_px = 0.4;   // effective disparity noise (see config/tum_fr1.conf)
+  double depth_factor = 5000.0;              // raw depth units per metre
+  DepthRange depth_range;                    // valid sensor depth, m
+  double baseline_m = 0.075;                 // projector-camera baseline
+  double depth_focal_px = 580.0;             // focal length of the IR camera
+  double disparity_sigma_px = 0.4;           // effective disparity noise (see config/tum_fr1.conf)
   int64_t max_rgb_depth_dt_ns = 20'000'000;  // pair colour and depth within 20 ms
   int64_t depth_time_offset_ns = 0;  // pair colour at t with the depth stamped nearest t + offset
   // The paper's eq. for structured light: sigma_rho = sigma_d / (f b), constant in 1/m.
