@@ -29,7 +29,7 @@ double texture(double u, double v, double phase) {
   return 0.5 + 0.28 * checker + 0.15 * blobs;
 }
 
-std::vector<Plane> scene_planes(bool with_box) {
+std::vector<Plane> scene_planes(bool with_box, double wall_z) {
   std::vector<Plane> planes;
   auto add = [&](Vector3d n, double d, Vector3d ua, Vector3d va, Vector3d lo, Vector3d hi,
                  double phase) {
@@ -37,7 +37,8 @@ std::vector<Plane> scene_planes(bool with_box) {
   };
   const double inf = 1e9;
   const Vector3d X(1, 0, 0), Y(0, 1, 0), Z(0, 0, 1);
-  add(-Z, -3.0, X, Y, Vector3d(-inf, -inf, 2.99), Vector3d(inf, inf, 3.01), 0.0);   // back wall
+  add(-Z, -wall_z, X, Y, Vector3d(-inf, -inf, wall_z - 0.01), Vector3d(inf, inf, wall_z + 0.01),
+      0.0);  // back wall
   add(-Y, -0.7, X, Z, Vector3d(-inf, 0.69, -inf), Vector3d(inf, 0.71, inf), 1.0);   // floor
   add(X, -1.3, Z, Y, Vector3d(-1.31, -inf, -inf), Vector3d(-1.29, inf, inf), 2.0);  // left wall
   add(-X, -1.5, Z, Y, Vector3d(1.49, -inf, -inf), Vector3d(1.51, inf, inf), 5.0);   // right wall
@@ -57,7 +58,7 @@ SE3 SyntheticScene::pose_at(double t) {
 }
 
 SyntheticFrame SyntheticScene::render(const SE3& T_w_c) const {
-  const std::vector<Plane> planes = scene_planes(with_box);
+  const std::vector<Plane> planes = scene_planes(with_box, back_wall_z_m);
   const int w = camera.width_px, h = camera.height_px;
   SyntheticFrame f;
   f.gray.resize(static_cast<size_t>(w) * h);
@@ -107,8 +108,8 @@ SyntheticFrame SyntheticScene::render(const SE3& T_w_c) const {
 
 const std::vector<SyntheticFrame>& SyntheticScene::render_path(int frames, double fps) const {
   // Tests of one binary share the renders of one path.
-  static std::map<std::tuple<int, int, double, bool>, std::vector<SyntheticFrame>> cache;
-  std::vector<SyntheticFrame>& out = cache[std::make_tuple(camera.width_px, frames, fps, with_box)];
+  static std::map<std::tuple<int, int, double, bool, double, double>, std::vector<SyntheticFrame>> cache;
+  std::vector<SyntheticFrame>& out = cache[std::make_tuple(camera.width_px, frames, fps, with_box, back_wall_z_m, max_depth_m)];
   while (static_cast<int>(out.size()) < frames) {
     out.push_back(render(pose_at(static_cast<double>(out.size()) / fps)));
   }

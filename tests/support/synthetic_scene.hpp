@@ -21,6 +21,7 @@ struct SyntheticScene {
   double depth_factor = 5000.0;
   double max_depth_m = 6.0;  // beyond it the simulated sensor reports nothing
   bool with_box = true;
+  double back_wall_z_m = 3.0;  // world z of the textured back wall
 
   SyntheticFrame render(const SE3& T_w_c) const;
   // Frames i = 0 .. frames-1 at pose_at(i / fps), rendered once per test binary.

@@ -1,0 +1,234 @@
+#include "rgbdtam/core/multiview.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace rgbdtam {
+namespace {
+constexpr int kPatchSamples = 7;     // 1-D patch along the epipolar line (code)
+constexpr float kPatchSpacingPx = 2.f;
+constexpr float kInfiniteCost = 1e30f;
+constexpr float kIntervalSigmas = 4.f;  // a seed's search interval after an observation
+
+struct Epipolar {
+  Eigen::Vector3f a;  // R d: the ray of the keyframe pixel in the current frame
+  Eigen::Vector3f t;  // translation of T_c_k
+  float fx, fy, cx, cy;
+  // Projection of the keyframe pixel at inverse depth rho: pi(R d / rho + t) = pi(R d + rho t).
+  bool project(float rho, Eigen::Vector2f* u) const {
+    const Eigen::Vector3f h = a + rho * t;
+    if (h.z() < 1e-3f) return false;
+    *u = Eigen::Vector2f(fx * h.x() / h.z() + cx, fy * h.y() / h.z() + cy);
+    return true;
+  }
+  // The inverse depth whose projection is u, solved on the image axis the line moves along most.
+  float inverse_depth_at(const Eigen::Vector2f& u, bool along_x) const {
+    const float m = along_x ? (u.x() - cx) / fx : (u.y() - cy) / fy;
+    const float num = (along_x ? a.x() : a.y()) - m * a.z();
+    const float den = m * t.z() - (along_x ? t.x() : t.y());
+    return std::fabs(den) < 1e-9f ? -1.f : num / den;
+  }
+};
+
+float sample(const ImageF& img, const Eigen::Vector2f& p) {
+  return sample_bilinear(img, p.x(), p.y());
+}
+}  // namespace
+
+void SeedMap::allocate(const PinholeIntrinsics& k, const MultiViewOptions& opt) {
+  opt_ = opt;
+  k_ = k;
+  seeds_.reserve_once(opt.max_seeds);
+  observations_.reserve_once(opt.max_seeds * opt.max_observations);
+}
+
+void SeedMap::reset(const ImageF& gray, const ImageF& sensor_inverse_depth, const ImageU8& edges,
+                    const SE3& T_w_k) {
+  gray_ = &gray;
+  T_w_k_ = T_w_k;
+  frames_ = 0;
+  seeds_.clear();
+  observations_.clear();
+  const int w = gray.width(), h = gray.height(), b = opt_.border_px;
+  auto gradient = [&](int x, int y, float* gx, float* gy) {
+    *gx = 0.5f * (gray.at(x + 1, y) - gray.at(x - 1, y));
+    *gy = 0.5f * (gray.at(x, y + 1) - gray.at(x, y - 1));
+    return std::fabs(*gx) + std::fabs(*gy) >= opt_.min_gradient;
+  };
+  int64_t count = 0;
+  float gx, gy;
+  for (int y = b; y < h - b; ++y)
+    for (int x = b; x < w - b; ++x) count += edges.at(x, y) != 0 && gradient(x, y, &gx, &gy);
+  // Thin evenly, in raster order, down to the seed budget.
+  const int64_t cap = opt_.max_seeds;
+  int64_t index = 0;
+  for (int y = b; y < h - b; ++y) {
+    for (int x = b; x < w - b; ++x) {
+      if (edges.at(x, y) == 0 || !gradient(x, y, &gx, &gy)) continue;
+      const int64_t i = index++;
+      if (count > cap && (i + 1) * cap / count == i * cap / count) continue;
+      const float norm = std::sqrt(gx * gx + gy * gy);
+      Seed s;
+      s.x = static_cast<int16_t>(x);
+      s.y = static_cast<int16_t>(y);
+      s.gx = gx / norm;
+      s.gy = gy / norm;
+      s.sensor_rho = sensor_inverse_depth.at(x, y);
+      s.rho_lo = opt_.min_inverse_depth;
+      s.rho_hi = opt_.max_inverse_depth;
+      s.count = 0;
+      if (!seeds_.push_back(s)) return;
+    }
+  }
+  for (int i = 0; i < seeds_.size() * opt_.max_observations; ++i) (void)observations_.push_back({0, 0});
+}
+
+bool SeedMap::search(const Seed& s, const ImageF& cur, const SE3& T_c_k, Observation* out) const {
+  Epipolar e;
+  const Eigen::Vector3f d((s.x - static_cast<float>(k_.cx_px)) / static_cast<float>(k_.fx_px),
+                          (s.y - static_cast<float>(k_.cy_px)) / static_cast<float>(k_.fy_px), 1.f);
+  e.a = T_c_k.rotation().cast<float>() * d;
+  e.t = T_c_k.translation().cast<float>();
+  e.fx = static_cast<float>(k_.fx_px);
+  e.fy = static_cast<float>(k_.fy_px);
+  e.cx = static_cast<float>(k_.cx_px);
+  e.cy = static_cast<float>(k_.cy_px);
+  Eigen::Vector2f u_far, u_near;
+  if (!e.project(s.rho_lo, &u_far) || !e.project(s.rho_hi, &u_near)) return false;
+  const Eigen::Vector2f segment = u_near - u_far;
+  const float length = segment.norm();
+  if (length > opt_.max_search_px || length < 1e-3f) return false;
+  const Eigen::Vector2f dir_c = segment / length;
+  // The epipolar direction in the keyframe: how the pixel moves towards the current camera.
+  const float rho_mid = 0.5f * (s.rho_lo + s.rho_hi);
+  const Eigen::Vector3f p = d / rho_mid;
+  const Eigen::Vector3f centre = -(T_c_k.rotation().transpose() * T_c_k.translation()).cast<float>();
+  const Eigen::Vector3f towards = centre - p;
+  Eigen::Vector2f dir_k(e.fx * (towards.x() - p.x() / p.z() * towards.z()) / p.z(),
+                        e.fy * (towards.y() - p.y() / p.z() * towards.z()) / p.z());
+  if (dir_k.norm() < 1e-6f) return false;
+  dir_k.normalize();
+  // Orient it like the current frame's scan direction, or the two patches would be mirrored:
+  // a keyframe pixel one step along dir_k, at the same depth, must move along +dir_c.
+  Eigen::Vector2f at_mid, shifted;
+  const Eigen::Vector3f d_step((s.x + dir_k.x() - e.cx) / e.fx, (s.y + dir_k.y() - e.cy) / e.fy, 1.f);
+  Epipolar stepped = e;
+  stepped.a = T_c_k.rotation().cast<float>() * d_step;
+  if (!e.project(rho_mid, &at_mid) || !stepped.project(rho_mid, &shifted)) return false;
+  if ((shifted - at_mid).dot(dir_c) < 0.f) dir_k = -dir_k;
+  // The patch must cross the edge, not run along it.
+  if (std::fabs(s.gx * dir_k.x() + s.gy * dir_k.y()) < opt_.min_alignment) return false;
+  float ref[kPatchSamples];
+  const Eigen::Vector2f origin(s.x, s.y);
+  for (int j = 0; j < kPatchSamples; ++j) {
+    ref[j] = 255.f * sample(*gray_, origin + (j - kPatchSamples / 2) * kPatchSpacingPx * dir_k);
+  }
+  // Scan the segment (plus 2 px each side, for the parabola) in 1 px steps.
+  const int steps = static_cast<int>(std::ceil(length)) + 5;
+  const float margin = 1.f + kPatchSamples / 2 * kPatchSpacingPx;
+  float best_cost = kInfiniteCost, prev = kInfiniteCost, before_best = kInfiniteCost;
+  float after_best = kInfiniteCost;
+  int best = -1;
+  for (int i = 0; i < steps; ++i) {
+    const Eigen::Vector2f c = u_far + (static_cast<float>(i) - 2.f) * dir_c;
+    float cost = kInfiniteCost;
+    if (cur.contains(c.x(), c.y(), margin)) {
+      cost = 0.f;
+      for (int j = 0; j < kPatchSamples; ++j) {
+        cost += std::fabs(ref[j] - 255.f * sample(cur, c + (j - kPatchSamples / 2) * kPatchSpacingPx * dir_c));
+      }
+    }
+    if (i == best + 1) after_best = cost;
+    if (cost < best_cost) {
+      best_cost = cost;
+      best = i;
+      before_best = prev;
+      after_best = kInfiniteCost;
+    }
+    prev = cost;
+  }
+  if (best < 0 || best_cost / kPatchSamples > opt_.max_mean_sad) return false;
+  float offset = 0.f;
+  if (before_best < kInfiniteCost && after_best < kInfiniteCost) {
+    const float curvature = before_best - 2.f * best_cost + after_best;
+    if (curvature > 1e-6f) offset = std::clamp(0.5f * (before_best - after_best) / curvature, -0.5f, 0.5f);
+  }
+  const Eigen::Vector2f match = u_far + (static_cast<float>(best) - 2.f + offset) * dir_c;
+  const bool along_x = std::fabs(dir_c.x()) >= std::fabs(dir_c.y());
+  const float rho = e.inverse_depth_at(match, along_x);
+  const float rho_next = e.inverse_depth_at(match + dir_c, along_x);
+  if (rho <= 0.f || rho_next <= 0.f) return false;
+  const float sigma = std::fabs(rho_next - rho);  // one pixel of disparity
+  const float parallax = e.t.norm() * rho;
+  if (parallax < opt_.min_parallax || rho < s.rho_lo - sigma || rho > s.rho_hi + sigma) return false;
+  out->rho = rho;
+  out->sigma = std::max(sigma, 1e-6f);
+  return true;
+}
+
+int SeedMap::observe(const ImageF& gray, const SE3& T_w_c) {
+  const SE3 T_c_k = T_w_c.inverse() * T_w_k_;
+  int accepted = 0;
+  for (int i = 0; i < seeds_.size(); ++i) {
+    Seed& s = seeds_[i];
+    if (s.count >= opt_.max_observations) continue;
+    Observation o;
+    if (!search(s, gray, T_c_k, &o)) continue;
+    observations_[i * opt_.max_observations + s.count] = o;
+    ++s.count;
+    s.rho_lo = std::max(opt_.min_inverse_depth, o.rho - kIntervalSigmas * o.sigma);
+    s.rho_hi = std::min(opt_.max_inverse_depth, o.rho + kIntervalSigmas * o.sigma);
+    ++accepted;
+  }
+  ++frames_;
+  return accepted;
+}
+
+void SeedMap::fuse(float sigma_sensor, FixedVector<FusedPixel>* out) const {
+  out->clear();
+  for (int i = 0; i < seeds_.size(); ++i) {
+    const Seed& s = seeds_[i];
+    FusedPixel f{s.x, s.y, 0.f, 0.f, gray_->at(s.x, s.y), DepthSource::kNone};
+    if (s.count >= opt_.min_observations) {
+      const Observation* obs = &observations_[i * opt_.max_observations];
+      float rhos[64];
+      const int n = std::min<int>(s.count, 64);
+      for (int j = 0; j < n; ++j) rhos[j] = obs[j].rho;
+      std::nth_element(rhos, rhos + n / 2, rhos + n);
+      const float median = rhos[n / 2];
+      // Inverse-variance fusion (paper eq. 7) of the observations that agree with the median.
+      double info = 0, weighted = 0;
+      int agree = 0;
+      for (int j = 0; j < n; ++j) {
+        if (std::fabs(obs[j].rho - median) > opt_.consistency_sigmas * obs[j].sigma) continue;
+        const double w = 1.0 / (static_cast<double>(obs[j].sigma) * obs[j].sigma);
+        info += w;
+        weighted += w * obs[j].rho;
+        ++agree;
+      }
+      if (agree >= opt_.min_observations && agree * 5 >= n * 3) {
+        f.rho = static_cast<float>(weighted / info);
+        f.sigma = static_cast<float>(1.0 / std::sqrt(info));
+        f.source = DepthSource::kMultiView;
+      }
+    }
+    if (s.sensor_rho > 0.f) {
+      if (f.source == DepthSource::kMultiView &&
+          std::fabs(f.rho - s.sensor_rho) <
+              3.f * std::sqrt(f.sigma * f.sigma + sigma_sensor * sigma_sensor)) {
+        const float w_mv = 1.f / (f.sigma * f.sigma), w_s = 1.f / (sigma_sensor * sigma_sensor);
+        f.rho = (w_mv * f.rho + w_s * s.sensor_rho) / (w_mv + w_s);
+        f.sigma = 1.f / std::sqrt(w_mv + w_s);
+        f.source = DepthSource::kFused;
+      } else {
+        // No multi-view estimate, or one the sensor contradicts: the sensor's reading stands.
+        f.rho = s.sensor_rho;
+        f.sigma = sigma_sensor;
+        f.source = DepthSource::kSensor;
+      }
+    }
+    if (f.source != DepthSource::kNone && !out->push_back(f)) return;
+  }
+}
+
+}  // namespace rgbdtam
