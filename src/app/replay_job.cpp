@@ -26,6 +26,12 @@ Status ReplayJob::init(const ReplayOptions& options) {
                  source_.depth_list().bad_lines, source_.depth_list().first_problem.message());
   }
   RGBDTAM_RETURN_IF_ERROR(pipeline_.init(p));
+  if (p.map_enabled) {
+    mapper_queue_.allocate(p.map_queue_frames, p.camera.width_px, p.camera.height_px);
+    RGBDTAM_RETURN_IF_ERROR(mapper_.init(p, p.camera, monotonic_ns, options.map_sink));
+    pipeline_.connect_mapper(&mapper_queue_);
+    if (p.map_threaded) mapper_thread_.start(&mapper_queue_, &mapper_);
+  }
   if (options.trajectory_path != nullptr) {
     RGBDTAM_RETURN_IF_ERROR(writer_.open(options.trajectory_path));
   }
@@ -52,6 +58,17 @@ bool ReplayJob::step() {
   const int64_t t1 = monotonic_ns();
   last_pose_ = pipeline_.process(frame);
   const int64_t t2 = monotonic_ns();
+  if (options_.params.map_enabled) {
+    if (options_.params.map_threaded) {
+      mapper_thread_.notify();
+    } else {
+      // Deterministic replay: the mapper runs its step right here, between frames.
+      while (MapperFrame* f = mapper_queue_.front()) {
+        mapper_.step(*f);
+        mapper_queue_.pop();
+      }
+    }
+  }
   const Status w = writer_.write(last_pose_);
   if (!w.is_ok() && reported_problems_++ < kMaxProblemsPrinted) {
     std::fprintf(stderr, "error: %s\n", w.message());
@@ -71,6 +88,13 @@ bool ReplayJob::step() {
 }
 
 Status ReplayJob::finish() {
+  if (options_.params.map_enabled) {
+    if (options_.params.map_threaded) {
+      mapper_thread_.stop();
+    } else {
+      mapper_.finish();
+    }
+  }
   finished_ns_ = monotonic_ns();
   return writer_.close();
 }
@@ -88,6 +112,18 @@ void ReplayJob::print_summary() const {
   std::printf("keyframes: %u created, %u reused, pool %d of %d, %d recycled\n", c.keyframes,
               c.reused, pipeline_.keyframes().size(), pipeline_.keyframes().capacity(),
               pipeline_.keyframes().recycled());
+  if (options_.params.map_enabled) {
+    const MappingCounters& m = mapper_.counters();
+    const double n = m.keyframes_mapped > 0 ? m.keyframes_mapped : 1;
+    std::printf("mapping: %u keyframes mapped (%s), %u frames triangulated, %u frames and %u "
+                "keyframes dropped at the queue; per keyframe %.0f sensor, %.0f multi-view, "
+                "%.0f fused edge points; mapper ms/keyframe median %.1f, p95 %.1f\n",
+                m.keyframes_mapped, options_.params.map_threaded ? "own thread" : "synchronous",
+                m.frames_observed, c.mapper_dropped_frames, c.mapper_dropped_keyframes,
+                m.points_sensor / n, m.points_multiview / n, m.points_fused / n,
+                mapper_.time_per_keyframe().percentile_ms(0.5),
+                mapper_.time_per_keyframe().percentile_ms(0.95));
+  }
   std::printf("tracking ms/frame: median %.2f, p95 %.2f, max %.2f\n",
               tracking_ms_.percentile_ms(0.5), tracking_ms_.percentile_ms(0.95),
               tracking_ms_.max_ms());

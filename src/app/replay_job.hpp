@@ -16,6 +16,7 @@ namespace rgbdtam {
 struct ReplayOptions {
   const char* sequence = nullptr;
   const char* trajectory_path = nullptr;  // optional
+  MapSink* map_sink = nullptr;            // optional: receives each keyframe's map
   Params params;
   bool progress = true;
   int max_frames = 0;  // 0 = all
@@ -37,12 +38,16 @@ class ReplayJob {
   const LatencyStats& frame_time() const { return frame_ms_; }
   const TumReplaySource& source() const { return source_; }
   const PoseEstimate& last_pose() const { return last_pose_; }
+  const MappingModule& mapper() const { return mapper_; }
 
  private:
   ReplayOptions options_;
   TumReplaySource source_;
   TrackingPipeline pipeline_;
   TrajectoryWriter writer_;
+  MapperQueue mapper_queue_;
+  MappingModule mapper_;
+  MappingThread mapper_thread_;
   std::vector<StampedPose> estimates_;  // reserved for every frame at init
   LatencyStats tracking_ms_, frame_ms_;
   PoseEstimate last_pose_;

@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 
@@ -77,7 +78,7 @@ void KeyframeBuilder::allocate_keyframe(Keyframe* kf) const {
   k.width_px = edges_[0].width();
   k.height_px = edges_[0].height();
   for (int l = 0; l < kPyramidLevels; ++l) {
-    kf->photometric[l].reserve_once(points_capacity(opt_, k, l, true));
+    for (auto& set : kf->photometric_sets) set[l].reserve_once(points_capacity(opt_, k, l, true));
     kf->geometric[l].reserve_once(points_capacity(opt_, k, l, false));
     k = k.half();
   }
@@ -93,6 +94,21 @@ void KeyframeBuilder::build(const FramePyramid& frame, uint32_t id, int64_t time
   kf->id = id;
   kf->timestamp_ns = timestamp_ns;
   kf->T_w_k = T_w_k;
+  kf->active_photometric.store(0, std::memory_order_relaxed);
+  kf->map_ready.store(false, std::memory_order_relaxed);
+  prepare(frame);
+  for (int l = 0; l < kPyramidLevels; ++l) {
+    select_photometric(frame, l, &kf->photometric_sets[0][l]);
+    select_geometric(frame, l, &kf->geometric[l]);
+  }
+}
+
+void KeyframeBuilder::build_photometric(const FramePyramid& frame, FixedVector<TrackPoint>* sets) {
+  prepare(frame);
+  for (int l = 0; l < kPyramidLevels; ++l) select_photometric(frame, l, &sets[l]);
+}
+
+void KeyframeBuilder::prepare(const FramePyramid& frame) {
   edge_count_ = canny_.detect(frame.gray(0), opt_.canny_low, opt_.canny_high, &edges_[0]);
   for (int l = 0; l < kPyramidLevels; ++l) {
     compute_gradients(frame.gray(l), &gx_[l], &gy_[l]);
@@ -124,8 +140,6 @@ void KeyframeBuilder::build(const FramePyramid& frame, uint32_t id, int64_t time
       if (above >= wanted) break;
     }
     gradient_threshold_[l] = static_cast<float>(bin) * kMaxGradient / kHistogramBins;
-    select_photometric(frame, l, &kf->photometric[l]);
-    select_geometric(frame, l, &kf->geometric[l]);
   }
 }
 

@@ -71,8 +71,13 @@ void FramePyramid::build_inverse_depth(const ImageU16& depth) {
   float* dst = inv_depth_[0].data();
   const float* table = inverse_of_raw_.get();
   for (int i = 0; i < depth.size(); ++i) dst[i] = table[src[i]];
-  for (int l = 1; l < kPyramidLevels; ++l)
+  build_inverse_depth_levels();
+}
+
+void FramePyramid::build_inverse_depth_levels() {
+  for (int l = 1; l < kPyramidLevels; ++l) {
     downsample_inverse_depth(inv_depth_[l - 1], &inv_depth_[l]);
+  }
   has_depth_ = true;
 }
 

@@ -97,7 +97,7 @@ void Tracker::allocate(const Keyframe& model, const TrackerOptions& opt) {
   opt_ = opt;
   int ph = 0, geo = 0;
   for (int l = 0; l < kPyramidLevels; ++l) {
-    ph = std::max(ph, model.photometric[l].capacity());
+    ph = std::max(ph, model.photometric(l).capacity());
     geo = std::max(geo, model.geometric[l].capacity());
   }
   ph_sample_.reserve_once(std::max(ph, 1));
@@ -246,7 +246,7 @@ Tracker::LevelCost Tracker::accumulate(const FixedVector<TrackPoint>& ph,
 
 Tracker::LevelCost Tracker::evaluate_level(const Keyframe& kf, const FramePyramid& frame, int level,
                                            const SE3& T_c_k, bool new_scale) {
-  const FixedVector<TrackPoint>& ph = kf.photometric[level];
+  const FixedVector<TrackPoint>& ph = kf.photometric(level);
   const FixedVector<TrackPoint>& geo = frame.has_depth() ? kf.geometric[level] : no_points_;
   const PinholeIntrinsics& k = frame.intrinsics(level);
   sample_photometric(ph, frame.gray(level), k, T_c_k);
@@ -270,7 +270,7 @@ double Tracker::overlap_at(const Keyframe& kf, const FramePyramid& frame, const 
 
 double Tracker::overlap_of(const Keyframe& kf, const LevelCost& finest) {
   // The paper's keyframe criterion counts the photometric points when there are any.
-  const int total = kf.photometric[0].size() > 0 ? kf.photometric[0].size() : finest.total;
+  const int total = kf.photometric(0).size() > 0 ? kf.photometric(0).size() : finest.total;
   return total > 0 ? static_cast<double>(finest.inliers) / total : 0.0;
 }
 

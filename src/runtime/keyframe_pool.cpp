@@ -3,7 +3,7 @@
 namespace rgbdtam {
 
 void KeyframePool::allocate(int capacity, const KeyframeBuilder& builder) {
-  RGBDTAM_ASSERT(capacity >= 2, "a keyframe pool needs room for the reference and a new one");
+  RGBDTAM_ASSERT(capacity >= 3, "a keyframe pool needs the reference, the mapped one and a new one");
   capacity_ = capacity;
   slots_.reset(new Keyframe[static_cast<size_t>(capacity)]);
   age_.reset(new uint64_t[static_cast<size_t>(capacity)]());
@@ -17,9 +17,10 @@ Keyframe* KeyframePool::acquire(const Keyframe* keep) {
   } else {
     slot = -1;
     for (int i = 0; i < capacity_; ++i) {
-      if (&slots_[i] == keep) continue;
+      if (&slots_[i] == keep || slots_[i].being_mapped.load(std::memory_order_acquire)) continue;
       if (slot < 0 || age_[i] < age_[slot]) slot = i;
     }
+    RGBDTAM_ASSERT(slot >= 0, "keyframe pool: every slot is referenced or being mapped");
     ++recycled_;
   }
   age_[slot] = ++clock_;

@@ -1,6 +1,7 @@
 #include "rgbdtam/runtime/tracking_pipeline.hpp"
 
 #include <algorithm>
+#include <cstring>
 
 namespace rgbdtam {
 
@@ -57,6 +58,7 @@ bool TrackingPipeline::reuse_keyframe(const SE3& T_w_c, PoseEstimate* out) {
   Keyframe* best = nullptr;
   double best_overlap = params_.tracker.keyframe_overlap;
   for (int i = 0; i < count; ++i) {
+    candidates[i]->adopt_map();
     const double overlap =
         tracker_.overlap_at(*candidates[i], pyramid_, candidates[i]->T_w_k.inverse() * T_w_c);
     if (overlap >= best_overlap) {
@@ -124,9 +126,11 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
     out.overlap = 1.f;
     out.reset_counter = reset_counter_;
     ++counters_.tracked;
+    offer_to_mapper(out, true);
     return out;
   }
 
+  reference_->adopt_map();
   const SE3 T_w_guess = predict_pose();
   const TrackResult r =
       tracker_.track(*reference_, pyramid_, reference_->T_w_k.inverse() * T_w_guess);
@@ -162,7 +166,31 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
     }
   }
   out.reset_counter = reset_counter_;
+  if ((out.flags & kPoseValid) != 0) offer_to_mapper(out, (out.flags & kNewKeyframe) != 0);
   return out;
+}
+
+void TrackingPipeline::offer_to_mapper(const PoseEstimate& pose, bool new_keyframe) {
+  if (mapper_queue_ == nullptr) return;
+  MapperFrame* slot = mapper_queue_->begin_push();
+  if (slot == nullptr) {
+    ++counters_.mapper_dropped_frames;
+    if (new_keyframe) ++counters_.mapper_dropped_keyframes;
+    return;
+  }
+  slot->sequence = pose.sequence;
+  slot->timestamp_ns = pose.timestamp_ns;
+  slot->T_w_c = pose.T_w_c;
+  std::memcpy(slot->gray.data(), pyramid_.gray(0).data(), sizeof(float) * slot->gray.size());
+  slot->new_keyframe = nullptr;
+  if (new_keyframe) {
+    std::memcpy(slot->inverse_depth.data(), pyramid_.inverse_depth(0).data(),
+                sizeof(float) * slot->inverse_depth.size());
+    std::memcpy(slot->edges.data(), builder_.edges().data(), slot->edges.size());
+    reference_->being_mapped.store(true, std::memory_order_release);
+    slot->new_keyframe = reference_;
+  }
+  mapper_queue_->publish();
 }
 
 }  // namespace rgbdtam

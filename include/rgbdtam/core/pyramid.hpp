@@ -24,6 +24,9 @@ class FramePyramid {
   // the coarser levels. A pixel outside the range is invalid (0).
   void build_inverse_depth(const ImageU16& depth);
   void clear_depth();
+  // For a map other than the sensor's: write level 0 here, then build the coarser levels.
+  ImageF& inverse_depth_level0() { return inv_depth_[0]; }
+  void build_inverse_depth_levels();
 
   const PinholeIntrinsics& intrinsics(int level) const { return k_[level]; }
   ImageF& gray(int level) { return gray_[level]; }

@@ -4,6 +4,7 @@
 // by their standard deviations, gain and brightness, inverse-compositional Gauss-Newton on
 // SE(3) over a 4-level pyramid. All buffers are sized in allocate(); track() never allocates.
 
+#include <atomic>
 #include <cstdint>
 
 #include "rgbdtam/core/canny.hpp"
@@ -39,12 +40,32 @@ struct TrackPoint {
   float J[6];     // d residual / d (v, omega) at the identity, keyframe side
 };
 
+// A keyframe's residual points. Its photometric points are double-buffered: the mapper writes
+// the fused map into the inactive set once and raises map_ready; the tracker's thread adopts
+// it between frames (adopt_map), so neither ever waits for the other.
 struct Keyframe {
   uint32_t id = 0;
   int64_t timestamp_ns = 0;
   SE3 T_w_k;
-  FixedVector<TrackPoint> photometric[kPyramidLevels];
-  FixedVector<TrackPoint> geometric[kPyramidLevels];
+  FixedVector<TrackPoint> photometric_sets[2][kPyramidLevels];
+  FixedVector<TrackPoint> geometric[kPyramidLevels];  // sensor depth only
+  std::atomic<int> active_photometric{0};
+  std::atomic<bool> map_ready{false};     // mapper -> tracker: the inactive set is the new map
+  std::atomic<bool> being_mapped{false};  // the pool must not recycle it
+
+  const FixedVector<TrackPoint>& photometric(int level) const {
+    return photometric_sets[active_photometric.load(std::memory_order_relaxed)][level];
+  }
+  FixedVector<TrackPoint>* inactive_photometric() {
+    return photometric_sets[1 - active_photometric.load(std::memory_order_acquire)];
+  }
+  // Tracker thread, between frames.
+  void adopt_map() {
+    if (map_ready.exchange(false, std::memory_order_acq_rel)) {
+      active_photometric.store(1 - active_photometric.load(std::memory_order_relaxed),
+                               std::memory_order_release);
+    }
+  }
 };
 
 // Selects a keyframe's residual points; owns its scratch images.
@@ -54,9 +75,14 @@ class KeyframeBuilder {
   void allocate_keyframe(Keyframe* kf) const;
   void build(const FramePyramid& frame, uint32_t id, int64_t timestamp_ns, const SE3& T_w_k,
              Keyframe* kf);
+  // Photometric points only, into sets[0 .. kPyramidLevels), from the frame's (fused) depth.
+  void build_photometric(const FramePyramid& frame, FixedVector<TrackPoint>* sets);
+  // Level-0 Canny edges of the last prepared frame.
+  const ImageU8& edges() const { return edges_[0]; }
   int edge_count() const { return edge_count_; }
 
  private:
+  void prepare(const FramePyramid& frame);  // edges, gradients and thresholds of every level
   void select_photometric(const FramePyramid& frame, int level, FixedVector<TrackPoint>* out);
   void select_geometric(const FramePyramid& frame, int level, FixedVector<TrackPoint>* out);
   bool is_semidense_pixel(int level, int x, int y) const;

@@ -1,6 +1,7 @@
 #pragma once
-// Fixed-capacity keyframe storage. Policy when full: recycle the oldest keyframe that is not
-// the current tracking reference, and count it; tracking never stops for a full pool.
+// Fixed-capacity keyframe storage. Policy when full: recycle the oldest keyframe that is neither
+// the current tracking reference nor being mapped, and count it; tracking never stops for a
+// full pool. With a capacity of at least 3 such a keyframe always exists.
 
 #include "rgbdtam/core/tracker.hpp"
 

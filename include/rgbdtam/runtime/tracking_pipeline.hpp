@@ -4,6 +4,7 @@
 // Thread: the caller's (replay: main thread; runtime: the tracking task).
 
 #include "rgbdtam/runtime/keyframe_pool.hpp"
+#include "rgbdtam/runtime/mapping.hpp"
 #include "rgbdtam/runtime/messages.hpp"
 #include "rgbdtam/runtime/params.hpp"
 
@@ -17,12 +18,16 @@ struct TrackingCounters {
   uint32_t keyframes = 0;
   uint32_t resets = 0;
   uint32_t reused = 0;  // keyframe switches that reused an earlier keyframe
+  uint32_t mapper_dropped_frames = 0;     // the mapper queue was full
+  uint32_t mapper_dropped_keyframes = 0;  // ... on a new keyframe: it keeps its sensor map
 };
 
 class TrackingPipeline {
  public:
   Status init(const Params& params);
   PoseEstimate process(const SensorFrame& frame);
+  // Every tracked frame is offered to the mapper through this queue (never waiting on it).
+  void connect_mapper(MapperQueue* queue) { mapper_queue_ = queue; }
 
   const TrackingCounters& counters() const { return counters_; }
   const KeyframePool& keyframes() const { return pool_; }
@@ -31,6 +36,7 @@ class TrackingPipeline {
  private:
   void start_keyframe(const SensorFrame& frame, const SE3& T_w_c, PoseEstimate* out);
   SE3 predict_pose() const;
+  void offer_to_mapper(const PoseEstimate& pose, bool new_keyframe);
   bool reuse_keyframe(const SE3& T_w_c, PoseEstimate* out);
 
   Params params_;
@@ -41,6 +47,7 @@ class TrackingPipeline {
   KeyframePool pool_;
   Tracker tracker_;
   Keyframe* reference_ = nullptr;
+  MapperQueue* mapper_queue_ = nullptr;
   uint32_t next_keyframe_id_ = 0;
   // Last two valid poses for the constant-velocity prediction.
   SE3 T_w_last_, T_w_before_last_;

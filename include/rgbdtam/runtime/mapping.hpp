@@ -1,0 +1,120 @@
+#pragma once
+// The mapping module (paper sec. V). The tracker hands it every tracked frame through a
+// bounded single-producer single-consumer queue of fixed slots; the mapper estimates the newest
+// keyframe's multi-view inverse depth, fuses it with the sensor's, and publishes the keyframe's
+// refreshed photometric points to the tracker (Keyframe::map_ready). step() is the same code
+// whether a replay drains the queue synchronously or the mapper's own thread does.
+//
+// Queue policy when full: the tracker never waits. The frame is not queued and is counted in
+// dropped_frames; when it was a new keyframe, that keyframe keeps its sensor-only map and is
+// counted in dropped_keyframes.
+
+#include <atomic>
+#include <condition_variable>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+#include "rgbdtam/core/multiview.hpp"
+#include "rgbdtam/core/tracker.hpp"
+#include "rgbdtam/runtime/latency_stats.hpp"
+#include "rgbdtam/runtime/params.hpp"
+
+namespace rgbdtam {
+
+// Tracker -> mapper, one per tracked frame. The slot owns its images.
+struct MapperFrame {
+  uint32_t sequence = 0;
+  int64_t timestamp_ns = 0;
+  SE3 T_w_c;
+  Keyframe* new_keyframe = nullptr;  // set when this frame became a keyframe
+  ImageF gray;                       // level 0, undistorted, [0,1]
+  ImageF inverse_depth;              // level 0 sensor inverse depth; filled for keyframes only
+  ImageU8 edges;                     // level 0 Canny edges; filled for keyframes only
+};
+
+class MapperQueue {
+ public:
+  void allocate(int slots, int width, int height);
+  // Producer: a free slot, or null when the queue is full.
+  MapperFrame* begin_push();
+  void publish();
+  // Consumer: the oldest published slot, or null.
+  MapperFrame* front();
+  void pop();
+
+ private:
+  std::unique_ptr<MapperFrame[]> slots_;
+  int capacity_ = 0;
+  std::atomic<uint32_t> head_{0};  // next to pop
+  std::atomic<uint32_t> tail_{0};  // next to publish
+};
+
+// Receives each finished keyframe map, e.g. to export it. Called on the mapper's thread.
+class MapSink {
+ public:
+  virtual ~MapSink() = default;
+  virtual void on_keyframe_map(const SE3& T_w_k, const PinholeIntrinsics& k,
+                               const FixedVector<FusedPixel>& pixels) = 0;
+};
+
+using ClockFn = int64_t (*)();
+
+struct MappingCounters {
+  uint32_t keyframes_mapped = 0;
+  uint32_t frames_observed = 0;
+  uint64_t points_sensor = 0;      // edge pixels whose depth is the sensor's alone
+  uint64_t points_multiview = 0;   // ... multi-view alone (the sensor saw nothing there)
+  uint64_t points_fused = 0;       // ... both, fused by inverse variance
+};
+
+class MappingModule {
+ public:
+  Status init(const Params& params, const PinholeIntrinsics& k, ClockFn clock, MapSink* sink);
+  void step(const MapperFrame& frame);
+  // Finishes the keyframe in progress (end of stream).
+  void finish();
+  const MappingCounters& counters() const { return counters_; }
+  const LatencyStats& time_per_keyframe() const { return per_keyframe_; }
+
+ private:
+  void finalize();
+
+  Params params_;
+  MultiViewOptions mv_;
+  ClockFn clock_ = nullptr;
+  MapSink* sink_ = nullptr;
+  SeedMap seeds_;
+  KeyframeBuilder builder_;
+  FramePyramid fused_;           // the keyframe's grey pyramid and fused inverse depth
+  ImageF sensor_inverse_depth_;  // the keyframe's own, kept for the seeds
+  FixedVector<FusedPixel> pixels_;
+  Keyframe* keyframe_ = nullptr;  // being mapped
+  SE3 T_w_last_used_;
+  float median_depth_m_ = 1.f;
+  int frames_used_ = 0;
+  int64_t spent_ns_ = 0;
+  MappingCounters counters_;
+  LatencyStats per_keyframe_;
+};
+
+// Runs a MappingModule on its own thread, fed from a MapperQueue.
+class MappingThread {
+ public:
+  ~MappingThread();
+  void start(MapperQueue* queue, MappingModule* mapper);
+  void notify();
+  // Drains what is queued, finishes the keyframe in progress, and joins.
+  void stop();
+
+ private:
+  void run();
+  MapperQueue* queue_ = nullptr;
+  MappingModule* mapper_ = nullptr;
+  std::thread thread_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::atomic<bool> stopping_{false};
+};
+
+}  // namespace rgbdtam
