@@ -8,6 +8,7 @@
 #include "evaluate_command.hpp"
 #include "replay_job.hpp"
 #include "rgbdtam/hal/file.hpp"
+#include "rgbdtam/hal/ply_map_writer.hpp"
 
 namespace rgbdtam {
 namespace {
@@ -18,7 +19,8 @@ void usage() {
   std::fprintf(stderr,
                "usage:\n"
                "  rgbdtam replay <sequence-dir> --config <file> [--trajectory out.txt]\n"
-               "                 [--set key=value]... [--max-frames N] [--quiet] [--json]\n"
+               "                 [--map map.ply] [--set key=value]... [--max-frames N] [--quiet]\n"
+               "                 [--json]\n"
                "  rgbdtam eval <groundtruth.txt> <estimate.txt> [--json] [--frames rgb.txt]\n"
                "  rgbdtam params --config <file> [--set key=value]...\n");
 }
@@ -81,10 +83,13 @@ int replay_command(int argc, char** argv) {
   ConfigArgs c;
   ReplayOptions options;
   bool json = false;  // one JSON object on stdout instead of the human summary
+  const char* map_path = nullptr;
   for (int i = 0; i < argc; ++i) {
     if (take_config_arg(argc, argv, &i, &c)) continue;
     if (std::strcmp(argv[i], "--trajectory") == 0 && i + 1 < argc) {
       options.trajectory_path = argv[++i];
+    } else if (std::strcmp(argv[i], "--map") == 0 && i + 1 < argc) {
+      map_path = argv[++i];
     } else if (std::strcmp(argv[i], "--max-frames") == 0 && i + 1 < argc) {
       options.max_frames = std::atoi(argv[++i]);
     } else if (std::strcmp(argv[i], "--quiet") == 0) {
@@ -109,6 +114,19 @@ int replay_command(int argc, char** argv) {
     std::fprintf(stderr, "rgbdtam replay: %s\n", s.message());
     return 1;
   }
+  auto ply = std::make_unique<PlyMapWriter>();
+  if (map_path != nullptr) {
+    if (!options.params.map_enabled) {
+      std::fprintf(stderr, "rgbdtam replay: --map needs map.enabled = true\n");
+      return 2;
+    }
+    s = ply->open(map_path);
+    if (!s.is_ok()) {
+      std::fprintf(stderr, "rgbdtam replay: %s\n", s.message());
+      return 1;
+    }
+    options.map_sink = ply.get();
+  }
   auto job = std::make_unique<ReplayJob>();
   s = job->init(options);
   if (!s.is_ok()) {
@@ -119,6 +137,16 @@ int replay_command(int argc, char** argv) {
   }
   s = job->finish();
   if (!s.is_ok()) std::fprintf(stderr, "rgbdtam replay: %s\n", s.message());
+  if (map_path != nullptr) {
+    const Status ps = ply->close();
+    if (!ps.is_ok()) {
+      std::fprintf(stderr, "rgbdtam replay: %s\n", ps.message());
+      s = ps;
+    } else if (!json) {
+      std::printf("map: %s (%llu points)\n", map_path,
+                  static_cast<unsigned long long>(ply->points()));
+    }
+  }
   if (!json) {
     job->print_summary();
     if (options.trajectory_path != nullptr) {

@@ -25,13 +25,7 @@ Status ReplayJob::init(const ReplayOptions& options) {
     std::fprintf(stderr, "warning: %d unreadable lines in depth.txt, skipped; first: %s\n",
                  source_.depth_list().bad_lines, source_.depth_list().first_problem.message());
   }
-  RGBDTAM_RETURN_IF_ERROR(pipeline_.init(p));
-  if (p.map_enabled) {
-    mapper_queue_.allocate(p.map_queue_frames, p.camera.width_px, p.camera.height_px);
-    RGBDTAM_RETURN_IF_ERROR(mapper_.init(p, p.camera, monotonic_ns, options.map_sink));
-    pipeline_.connect_mapper(&mapper_queue_);
-    if (p.map_threaded) mapper_thread_.start(&mapper_queue_, &mapper_);
-  }
+  RGBDTAM_RETURN_IF_ERROR(system_.init(p, monotonic_ns, options.map_sink));
   if (options.trajectory_path != nullptr) {
     RGBDTAM_RETURN_IF_ERROR(writer_.open(options.trajectory_path));
   }
@@ -56,19 +50,9 @@ bool ReplayJob::step() {
     if (!s.is_ok()) return true;
   }
   const int64_t t1 = monotonic_ns();
-  last_pose_ = pipeline_.process(frame);
+  last_pose_ = system_.track(frame);
   const int64_t t2 = monotonic_ns();
-  if (options_.params.map_enabled) {
-    if (options_.params.map_threaded) {
-      mapper_thread_.notify();
-    } else {
-      // Deterministic replay: the mapper runs its step right here, between frames.
-      while (MapperFrame* f = mapper_queue_.front()) {
-        mapper_.step(*f);
-        mapper_queue_.pop();
-      }
-    }
-  }
+  system_.map_pending();
   const Status w = writer_.write(last_pose_);
   if (!w.is_ok() && reported_problems_++ < kMaxProblemsPrinted) {
     std::fprintf(stderr, "error: %s\n", w.message());
@@ -82,25 +66,19 @@ bool ReplayJob::step() {
   if (options_.progress && processed_ % kProgressEvery == 0) {
     std::fprintf(stderr, "[%5d/%d] tracking %.1f ms median, %u keyframes, %u lost\n", processed_,
                  source_.frame_count(), tracking_ms_.percentile_ms(0.5),
-                 pipeline_.counters().keyframes, pipeline_.counters().lost);
+                 system_.tracking().counters().keyframes, system_.tracking().counters().lost);
   }
   return true;
 }
 
 Status ReplayJob::finish() {
-  if (options_.params.map_enabled) {
-    if (options_.params.map_threaded) {
-      mapper_thread_.stop();
-    } else {
-      mapper_.finish();
-    }
-  }
+  system_.finish();
   finished_ns_ = monotonic_ns();
   return writer_.close();
 }
 
 void ReplayJob::print_summary() const {
-  const TrackingCounters& c = pipeline_.counters();
+  const TrackingCounters& c = system_.tracking().counters();
   const ReplayCounters& rc = source_.counters();
   const double seconds = static_cast<double>(finished_ns_ - started_ns_) * 1e-9;
   char residuals[16];
@@ -110,19 +88,20 @@ void ReplayJob::print_summary() const {
   std::printf("frames: read %u, skipped %u, without depth %u; tracked %u, lost %u, resets %u\n",
               rc.delivered, rc.skipped, rc.without_depth, c.tracked, c.lost, c.resets);
   std::printf("keyframes: %u created, %u reused, pool %d of %d, %d recycled\n", c.keyframes,
-              c.reused, pipeline_.keyframes().size(), pipeline_.keyframes().capacity(),
-              pipeline_.keyframes().recycled());
+              c.reused, system_.tracking().keyframes().size(),
+              system_.tracking().keyframes().capacity(), system_.tracking().keyframes().recycled());
   if (options_.params.map_enabled) {
-    const MappingCounters& m = mapper_.counters();
+    const MappingCounters& m = system_.mapper().counters();
     const double n = m.keyframes_mapped > 0 ? m.keyframes_mapped : 1;
-    std::printf("mapping: %u keyframes mapped (%s), %u frames triangulated, %u frames and %u "
-                "keyframes dropped at the queue; per keyframe %.0f sensor, %.0f multi-view, "
-                "%.0f fused edge points; mapper ms/keyframe median %.1f, p95 %.1f\n",
-                m.keyframes_mapped, options_.params.map_threaded ? "own thread" : "synchronous",
-                m.frames_observed, c.mapper_dropped_frames, c.mapper_dropped_keyframes,
-                m.points_sensor / n, m.points_multiview / n, m.points_fused / n,
-                mapper_.time_per_keyframe().percentile_ms(0.5),
-                mapper_.time_per_keyframe().percentile_ms(0.95));
+    std::printf(
+        "mapping: %u keyframes mapped (%s), %u frames triangulated, %u frames and %u "
+        "keyframes dropped at the queue; per keyframe %.0f sensor, %.0f multi-view, "
+        "%.0f fused edge points; mapper ms/keyframe median %.1f, p95 %.1f\n",
+        m.keyframes_mapped, options_.params.map_threaded ? "own thread" : "synchronous",
+        m.frames_observed, c.mapper_dropped_frames, c.mapper_dropped_keyframes, m.points_sensor / n,
+        m.points_multiview / n, m.points_fused / n,
+        system_.mapper().time_per_keyframe().percentile_ms(0.5),
+        system_.mapper().time_per_keyframe().percentile_ms(0.95));
   }
   std::printf("tracking ms/frame: median %.2f, p95 %.2f, max %.2f\n",
               tracking_ms_.percentile_ms(0.5), tracking_ms_.percentile_ms(0.95),
@@ -139,7 +118,7 @@ void ReplayJob::print_summary() const {
 namespace rgbdtam {
 
 void ReplayJob::print_json(const EvaluationReport& r) const {
-  const TrackingCounters& c = pipeline_.counters();
+  const TrackingCounters& c = system_.tracking().counters();
   char residuals[16];
   options_.params.tracker.residuals.name(residuals, sizeof(residuals));
   std::printf(

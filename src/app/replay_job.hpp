@@ -9,7 +9,7 @@
 #include "rgbdtam/hal/tum_replay_source.hpp"
 #include "rgbdtam/hal/tum_trajectory.hpp"
 #include "rgbdtam/runtime/latency_stats.hpp"
-#include "rgbdtam/runtime/tracking_pipeline.hpp"
+#include "rgbdtam/runtime/slam_system.hpp"
 
 namespace rgbdtam {
 
@@ -33,21 +33,18 @@ class ReplayJob {
   void print_json(const EvaluationReport& report) const;
 
   const std::vector<StampedPose>& estimates() const { return estimates_; }
-  const TrackingCounters& counters() const { return pipeline_.counters(); }
+  const TrackingCounters& counters() const { return system_.tracking().counters(); }
   const LatencyStats& tracking_time() const { return tracking_ms_; }
   const LatencyStats& frame_time() const { return frame_ms_; }
   const TumReplaySource& source() const { return source_; }
   const PoseEstimate& last_pose() const { return last_pose_; }
-  const MappingModule& mapper() const { return mapper_; }
+  const MappingModule& mapper() const { return system_.mapper(); }
 
  private:
   ReplayOptions options_;
   TumReplaySource source_;
-  TrackingPipeline pipeline_;
+  SlamSystem system_;
   TrajectoryWriter writer_;
-  MapperQueue mapper_queue_;
-  MappingModule mapper_;
-  MappingThread mapper_thread_;
   std::vector<StampedPose> estimates_;  // reserved for every frame at init
   LatencyStats tracking_ms_, frame_ms_;
   PoseEstimate last_pose_;

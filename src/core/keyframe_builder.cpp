@@ -90,7 +90,7 @@ bool KeyframeBuilder::is_semidense_pixel(int level, int x, int y) const {
 }
 
 void KeyframeBuilder::build(const FramePyramid& frame, uint32_t id, int64_t timestamp_ns,
-                            const SE3& T_w_k, Keyframe* kf) {
+                            const SE3& T_w_k, Keyframe* kf, const FramePyramid* photometric_depth) {
   kf->id = id;
   kf->timestamp_ns = timestamp_ns;
   kf->T_w_k = T_w_k;
@@ -98,14 +98,15 @@ void KeyframeBuilder::build(const FramePyramid& frame, uint32_t id, int64_t time
   kf->map_ready.store(false, std::memory_order_relaxed);
   prepare(frame);
   for (int l = 0; l < kPyramidLevels; ++l) {
-    select_photometric(frame, l, &kf->photometric_sets[0][l]);
+    select_photometric(frame, photometric_depth != nullptr ? *photometric_depth : frame, l,
+                       &kf->photometric_sets[0][l]);
     select_geometric(frame, l, &kf->geometric[l]);
   }
 }
 
 void KeyframeBuilder::build_photometric(const FramePyramid& frame, FixedVector<TrackPoint>* sets) {
   prepare(frame);
-  for (int l = 0; l < kPyramidLevels; ++l) select_photometric(frame, l, &sets[l]);
+  for (int l = 0; l < kPyramidLevels; ++l) select_photometric(frame, frame, l, &sets[l]);
 }
 
 void KeyframeBuilder::prepare(const FramePyramid& frame) {
@@ -143,13 +144,13 @@ void KeyframeBuilder::prepare(const FramePyramid& frame) {
   }
 }
 
-void KeyframeBuilder::select_photometric(const FramePyramid& frame, int level,
-                                         FixedVector<TrackPoint>* out) {
+void KeyframeBuilder::select_photometric(const FramePyramid& frame, const FramePyramid& depth,
+                                         int level, FixedVector<TrackPoint>* out) {
   out->clear();
   if (opt_.residuals.photometric == PhotometricMode::kOff) return;
   const bool dense = opt_.residuals.photometric == PhotometricMode::kDense;
   const ImageF& img = frame.gray(level);
-  const ImageF& idepth = frame.inverse_depth(level);
+  const ImageF& idepth = depth.inverse_depth(level);
   const PinholeIntrinsics& k = frame.intrinsics(level);
   const int w = img.width(), h = img.height();
   auto candidate = [&](int x, int y) {

@@ -5,7 +5,7 @@
 
 namespace rgbdtam {
 namespace {
-constexpr int kPatchSamples = 7;     // 1-D patch along the epipolar line (code)
+constexpr int kPatchSamples = 7;  // 1-D patch along the epipolar line (code)
 constexpr float kPatchSpacingPx = 2.f;
 constexpr float kInfiniteCost = 1e30f;
 constexpr float kIntervalSigmas = 4.f;  // a seed's search interval after an observation
@@ -43,7 +43,7 @@ void SeedMap::allocate(const PinholeIntrinsics& k, const MultiViewOptions& opt) 
 }
 
 void SeedMap::reset(const ImageF& gray, const ImageF& sensor_inverse_depth, const ImageU8& edges,
-                    const SE3& T_w_k) {
+                    const SE3& T_w_k, float max_inverse_depth) {
   gray_ = &gray;
   T_w_k_ = T_w_k;
   frames_ = 0;
@@ -75,12 +75,13 @@ void SeedMap::reset(const ImageF& gray, const ImageF& sensor_inverse_depth, cons
       s.gy = gy / norm;
       s.sensor_rho = sensor_inverse_depth.at(x, y);
       s.rho_lo = opt_.min_inverse_depth;
-      s.rho_hi = opt_.max_inverse_depth;
+      s.rho_hi = max_inverse_depth;
       s.count = 0;
       if (!seeds_.push_back(s)) return;
     }
   }
-  for (int i = 0; i < seeds_.size() * opt_.max_observations; ++i) (void)observations_.push_back({0, 0});
+  for (int i = 0; i < seeds_.size() * opt_.max_observations; ++i)
+    (void)observations_.push_back({0, 0});
 }
 
 bool SeedMap::search(const Seed& s, const ImageF& cur, const SE3& T_c_k, Observation* out) const {
@@ -102,7 +103,8 @@ bool SeedMap::search(const Seed& s, const ImageF& cur, const SE3& T_c_k, Observa
   // The epipolar direction in the keyframe: how the pixel moves towards the current camera.
   const float rho_mid = 0.5f * (s.rho_lo + s.rho_hi);
   const Eigen::Vector3f p = d / rho_mid;
-  const Eigen::Vector3f centre = -(T_c_k.rotation().transpose() * T_c_k.translation()).cast<float>();
+  const Eigen::Vector3f centre =
+      -(T_c_k.rotation().transpose() * T_c_k.translation()).cast<float>();
   const Eigen::Vector3f towards = centre - p;
   Eigen::Vector2f dir_k(e.fx * (towards.x() - p.x() / p.z() * towards.z()) / p.z(),
                         e.fy * (towards.y() - p.y() / p.z() * towards.z()) / p.z());
@@ -111,7 +113,8 @@ bool SeedMap::search(const Seed& s, const ImageF& cur, const SE3& T_c_k, Observa
   // Orient it like the current frame's scan direction, or the two patches would be mirrored:
   // a keyframe pixel one step along dir_k, at the same depth, must move along +dir_c.
   Eigen::Vector2f at_mid, shifted;
-  const Eigen::Vector3f d_step((s.x + dir_k.x() - e.cx) / e.fx, (s.y + dir_k.y() - e.cy) / e.fy, 1.f);
+  const Eigen::Vector3f d_step((s.x + dir_k.x() - e.cx) / e.fx, (s.y + dir_k.y() - e.cy) / e.fy,
+                               1.f);
   Epipolar stepped = e;
   stepped.a = T_c_k.rotation().cast<float>() * d_step;
   if (!e.project(rho_mid, &at_mid) || !stepped.project(rho_mid, &shifted)) return false;
@@ -135,7 +138,8 @@ bool SeedMap::search(const Seed& s, const ImageF& cur, const SE3& T_c_k, Observa
     if (cur.contains(c.x(), c.y(), margin)) {
       cost = 0.f;
       for (int j = 0; j < kPatchSamples; ++j) {
-        cost += std::fabs(ref[j] - 255.f * sample(cur, c + (j - kPatchSamples / 2) * kPatchSpacingPx * dir_c));
+        cost += std::fabs(
+            ref[j] - 255.f * sample(cur, c + (j - kPatchSamples / 2) * kPatchSpacingPx * dir_c));
       }
     }
     if (i == best + 1) after_best = cost;
@@ -151,7 +155,8 @@ bool SeedMap::search(const Seed& s, const ImageF& cur, const SE3& T_c_k, Observa
   float offset = 0.f;
   if (before_best < kInfiniteCost && after_best < kInfiniteCost) {
     const float curvature = before_best - 2.f * best_cost + after_best;
-    if (curvature > 1e-6f) offset = std::clamp(0.5f * (before_best - after_best) / curvature, -0.5f, 0.5f);
+    if (curvature > 1e-6f)
+      offset = std::clamp(0.5f * (before_best - after_best) / curvature, -0.5f, 0.5f);
   }
   const Eigen::Vector2f match = u_far + (static_cast<float>(best) - 2.f + offset) * dir_c;
   const bool along_x = std::fabs(dir_c.x()) >= std::fabs(dir_c.y());
@@ -160,7 +165,8 @@ bool SeedMap::search(const Seed& s, const ImageF& cur, const SE3& T_c_k, Observa
   if (rho <= 0.f || rho_next <= 0.f) return false;
   const float sigma = std::fabs(rho_next - rho);  // one pixel of disparity
   const float parallax = e.t.norm() * rho;
-  if (parallax < opt_.min_parallax || rho < s.rho_lo - sigma || rho > s.rho_hi + sigma) return false;
+  if (parallax < opt_.min_parallax || rho < s.rho_lo - sigma || rho > s.rho_hi + sigma)
+    return false;
   out->rho = rho;
   out->sigma = std::max(sigma, 1e-6f);
   return true;
@@ -177,7 +183,7 @@ int SeedMap::observe(const ImageF& gray, const SE3& T_w_c) {
     observations_[i * opt_.max_observations + s.count] = o;
     ++s.count;
     s.rho_lo = std::max(opt_.min_inverse_depth, o.rho - kIntervalSigmas * o.sigma);
-    s.rho_hi = std::min(opt_.max_inverse_depth, o.rho + kIntervalSigmas * o.sigma);
+    s.rho_hi = std::max(s.rho_lo, std::min(s.rho_hi, o.rho + kIntervalSigmas * o.sigma));
     ++accepted;
   }
   ++frames_;

@@ -3,7 +3,8 @@
 namespace rgbdtam {
 
 void KeyframePool::allocate(int capacity, const KeyframeBuilder& builder) {
-  RGBDTAM_ASSERT(capacity >= 3, "a keyframe pool needs the reference, the mapped one and a new one");
+  RGBDTAM_ASSERT(capacity >= 3,
+                 "a keyframe pool needs the reference, the mapped one and a new one");
   capacity_ = capacity;
   slots_.reset(new Keyframe[static_cast<size_t>(capacity)]);
   age_.reset(new uint64_t[static_cast<size_t>(capacity)]());

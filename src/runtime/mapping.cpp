@@ -10,8 +10,8 @@ void copy_image(const ImageF& from, ImageF* to) {
   std::memcpy(to->data(), from.data(), sizeof(float) * static_cast<size_t>(from.size()));
 }
 
-// Median depth of the valid sensor pixels, from a sparse sample.
-float median_depth_m(const ImageF& inverse_depth) {
+// Median and nearest depth of the valid sensor pixels, from a sparse sample.
+float median_depth_m(const ImageF& inverse_depth, float* nearest_m) {
   constexpr int kStride = 37;  // a prime, so the sample does not alias with image rows
   constexpr int kMaxSamples = 8192;
   float samples[kMaxSamples];
@@ -20,6 +20,7 @@ float median_depth_m(const ImageF& inverse_depth) {
     const float rho = inverse_depth.data()[i];
     if (rho > 0.f) samples[n++] = 1.f / rho;
   }
+  *nearest_m = n > 0 ? *std::min_element(samples, samples + n) : 0.f;
   if (n == 0) return 1.f;
   std::nth_element(samples, samples + n / 2, samples + n);
   return samples[n / 2];
@@ -65,69 +66,114 @@ Status MappingModule::init(const Params& params, const PinholeIntrinsics& k, Clo
   sink_ = sink;
   mv_.max_seeds = params.map_seeds;
   mv_.max_inverse_depth = static_cast<float>(1.0 / (0.5 * params.sensor.depth_range.min_m));
-  seeds_.allocate(k, mv_);
+  for (Job& job : jobs_) {
+    job.seeds.allocate(k, mv_);
+    job.gray.allocate(k.width_px, k.height_px);
+    job.sensor_inverse_depth.allocate(k.width_px, k.height_px);
+  }
   builder_.allocate(k, params.tracker);
   fused_.allocate(k, params.sensor.depth_factor, params.sensor.depth_range);
-  sensor_inverse_depth_.allocate(k.width_px, k.height_px);
   pixels_.reserve_once(mv_.max_seeds);
   return Status::ok();
 }
 
+void MappingModule::start(Job* job, const MapperFrame& frame) {
+  job->keyframe = frame.new_keyframe;
+  copy_image(frame.gray, &job->gray);
+  copy_image(frame.inverse_depth, &job->sensor_inverse_depth);
+  float nearest_m = 0.f;
+  job->median_depth_m = median_depth_m(job->sensor_inverse_depth, &nearest_m);
+  const float max_rho =
+      nearest_m > 0.f ? std::min(mv_.max_inverse_depth, 2.f / nearest_m) : mv_.max_inverse_depth;
+  job->seeds.reset(job->gray, job->sensor_inverse_depth, frame.edges, frame.T_w_c, max_rho);
+  job->T_w_last_used = frame.T_w_c;
+  job->frames_used = 0;
+  job->started = ++arrivals_;
+  job->spent_ns = 0;
+}
+
 void MappingModule::step(const MapperFrame& frame) {
-  const int64_t t0 = clock_();
   if (frame.new_keyframe != nullptr) {
-    if (keyframe_ != nullptr) finalize();
-    keyframe_ = frame.new_keyframe;
-    copy_image(frame.gray, &fused_.gray(0));
-    fused_.build_gray();
-    copy_image(frame.inverse_depth, &sensor_inverse_depth_);
-    seeds_.reset(fused_.gray(0), sensor_inverse_depth_, frame.edges, frame.T_w_c);
-    median_depth_m_ = median_depth_m(sensor_inverse_depth_);
-    T_w_last_used_ = frame.T_w_c;
-    frames_used_ = 0;
-    spent_ns_ = 0;
-  } else if (keyframe_ != nullptr) {
-    // A frame is used once it has moved far enough, relative to the scene, from the last one.
-    const double baseline = (frame.T_w_c.translation() - T_w_last_used_.translation()).norm();
-    if (baseline >= params_.map_min_baseline_ratio * median_depth_m_) {
-      seeds_.observe(frame.gray, frame.T_w_c);
-      T_w_last_used_ = frame.T_w_c;
-      ++frames_used_;
-      ++counters_.frames_observed;
+    // A free slot, or else the oldest open keyframe is finished first.
+    Job* slot = nullptr;
+    for (Job& job : jobs_) {
+      if (job.keyframe == nullptr) {
+        slot = &job;
+        break;
+      }
+      if (slot == nullptr || job.started < slot->started) slot = &job;
     }
+    if (slot->keyframe != nullptr) finalize(slot);
+    const int64_t t0 = clock_();
+    start(slot, frame);
+    slot->spent_ns += clock_() - t0;
+    return;
   }
-  spent_ns_ += clock_() - t0;
-  if (keyframe_ != nullptr && frames_used_ >= params_.map_frames_per_keyframe) finalize();
+  for (Job& job : jobs_) {
+    if (job.keyframe == nullptr) continue;
+    // A frame is used once it has moved far enough, relative to the scene, from the last one.
+    const double baseline = (frame.T_w_c.translation() - job.T_w_last_used.translation()).norm();
+    if (baseline < params_.map_min_baseline_ratio * job.median_depth_m) continue;
+    const int64_t t0 = clock_();
+    job.seeds.observe(frame.gray, frame.T_w_c);
+    job.T_w_last_used = frame.T_w_c;
+    ++job.frames_used;
+    ++counters_.frames_observed;
+    job.spent_ns += clock_() - t0;
+    if (job.frames_used >= params_.map_frames_per_keyframe) finalize(&job);
+  }
 }
 
 void MappingModule::finish() {
-  if (keyframe_ != nullptr) finalize();
+  // Oldest first, as they arrived.
+  for (;;) {
+    Job* oldest = nullptr;
+    for (Job& job : jobs_) {
+      if (job.keyframe != nullptr && (oldest == nullptr || job.started < oldest->started)) {
+        oldest = &job;
+      }
+    }
+    if (oldest == nullptr) return;
+    finalize(oldest);
+  }
 }
 
-void MappingModule::finalize() {
+void MappingModule::finalize(Job* job) {
   const int64_t t0 = clock_();
   const float sigma_sensor = static_cast<float>(params_.sensor.inverse_depth_sigma());
-  seeds_.fuse(sigma_sensor, &pixels_);
+  job->seeds.fuse(sigma_sensor, &pixels_);
   // The keyframe's map: the sensor's inverse depth, with every edge pixel's fused estimate.
+  copy_image(job->gray, &fused_.gray(0));
+  fused_.build_gray();
   ImageF& map = fused_.inverse_depth_level0();
-  copy_image(sensor_inverse_depth_, &map);
+  copy_image(job->sensor_inverse_depth, &map);
   for (const FusedPixel& p : pixels_) {
     map.at(p.x, p.y) = p.rho;
     switch (p.source) {
-      case DepthSource::kSensor: ++counters_.points_sensor; break;
-      case DepthSource::kMultiView: ++counters_.points_multiview; break;
-      case DepthSource::kFused: ++counters_.points_fused; break;
-      case DepthSource::kNone: break;
+      case DepthSource::kSensor:
+        ++counters_.points_sensor;
+        break;
+      case DepthSource::kMultiView:
+        ++counters_.points_multiview;
+        break;
+      case DepthSource::kFused:
+        ++counters_.points_fused;
+        break;
+      case DepthSource::kNone:
+        break;
     }
   }
   fused_.build_inverse_depth_levels();
-  builder_.build_photometric(fused_, keyframe_->inactive_photometric());
-  keyframe_->map_ready.store(true, std::memory_order_release);
-  keyframe_->being_mapped.store(false, std::memory_order_release);
-  if (sink_ != nullptr) sink_->on_keyframe_map(seeds_.T_w_k(), fused_.intrinsics(0), pixels_);
+  Keyframe* kf = job->keyframe;
+  builder_.build_photometric(fused_, kf->inactive_photometric());
+  kf->map_ready.store(true, std::memory_order_release);
+  kf->being_mapped.store(false, std::memory_order_release);
+  if (sink_ != nullptr) {
+    sink_->on_keyframe_map(kf->timestamp_ns, job->seeds.T_w_k(), fused_.intrinsics(0), pixels_);
+  }
   ++counters_.keyframes_mapped;
-  per_keyframe_.add(spent_ns_ + clock_() - t0);
-  keyframe_ = nullptr;
+  per_keyframe_.add(job->spent_ns + clock_() - t0);
+  job->keyframe = nullptr;
 }
 
 MappingThread::~MappingThread() {

@@ -1,6 +1,7 @@
 #include "rgbdtam/runtime/tracking_pipeline.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 
 namespace rgbdtam {
@@ -10,6 +11,7 @@ Status TrackingPipeline::init(const Params& params) {
   params_.tracker.inverse_depth_sigma = params.sensor.inverse_depth_sigma();
   undistorter_.init(params_.camera, params_.distortion);
   pyramid_.allocate(params_.camera, params_.sensor.depth_factor, params_.sensor.depth_range);
+  propagated_.allocate(params_.camera, params_.sensor.depth_factor, params_.sensor.depth_range);
   depth_undistorted_.allocate(params_.camera.width_px, params_.camera.height_px);
   builder_.allocate(params_.camera, params_.tracker);
   pool_.allocate(params_.keyframe_pool_size, builder_);
@@ -86,7 +88,12 @@ bool TrackingPipeline::reuse_keyframe(const SE3& T_w_c, PoseEstimate* out) {
 void TrackingPipeline::start_keyframe(const SensorFrame& frame, const SE3& T_w_c,
                                       PoseEstimate* out) {
   Keyframe* kf = pool_.acquire(reference_);
-  builder_.build(pyramid_, next_keyframe_id_++, frame.timestamp_ns, T_w_c, kf);
+  // With mapping, the new keyframe starts with the previous one's map where its sensor is
+  // blind (the authors' "local map"), until its own multi-view map replaces it.
+  const bool propagate = mapper_queue_ != nullptr && reference_ != nullptr;
+  if (propagate) propagate_map(*reference_, T_w_c);
+  builder_.build(pyramid_, next_keyframe_id_++, frame.timestamp_ns, T_w_c, kf,
+                 propagate ? &propagated_ : nullptr);
   reference_ = kf;
   ++counters_.keyframes;
   out->flags |= kNewKeyframe;
@@ -168,6 +175,25 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
   out.reset_counter = reset_counter_;
   if ((out.flags & kPoseValid) != 0) offer_to_mapper(out, (out.flags & kNewKeyframe) != 0);
   return out;
+}
+
+void TrackingPipeline::propagate_map(const Keyframe& from, const SE3& T_w_c) {
+  ImageF& map = propagated_.inverse_depth_level0();
+  const ImageF& sensor = pyramid_.inverse_depth(0);
+  std::memcpy(map.data(), sensor.data(), sizeof(float) * static_cast<size_t>(map.size()));
+  const SE3 T_c_k = T_w_c.inverse() * from.T_w_k;
+  const PinholeIntrinsics& k = pyramid_.intrinsics(0);
+  for (const TrackPoint& p : from.photometric(0)) {
+    const Vector3d q = T_c_k * Vector3d(p.x, p.y, p.z);
+    if (q.z() < 0.05) continue;
+    const long u = std::lround(k.fx_px * q.x() / q.z() + k.cx_px);
+    const long v = std::lround(k.fy_px * q.y() / q.z() + k.cy_px);
+    if (u < 0 || v < 0 || u >= map.width() || v >= map.height()) continue;
+    const float rho = static_cast<float>(1.0 / q.z());
+    if (sensor.at(u, v) > 0.f) continue;         // the sensor's own reading wins
+    map.at(u, v) = std::max(map.at(u, v), rho);  // the nearest point occludes
+  }
+  propagated_.build_inverse_depth_levels();
 }
 
 void TrackingPipeline::offer_to_mapper(const PoseEstimate& pose, bool new_keyframe) {

@@ -6,6 +6,7 @@
 
 #include <atomic>
 #include <cstdlib>
+#include <initializer_list>
 #include <new>
 
 #include "replay_job.hpp"
@@ -79,18 +80,9 @@ void operator delete[](void* p, size_t) noexcept { std::free(p); }
 namespace rgbdtam {
 namespace {
 
-TEST(Allocations, NoneWhileReplayingTheClipAfterInit) {
-  // The counter itself must see allocations, or a zero below would prove nothing.
-  g_armed = true;
-  g_escape = std::malloc(64);
-  std::free(g_escape);
-  g_escape = new int(3);
-  delete static_cast<int*>(g_escape);
-  g_armed = false;
-  ASSERT_EQ(g_calls.load(), 2) << "the malloc/new counters are not wired in";
-  g_calls = 0;
-  g_bytes = 0;
-
+// Replays the committed clip with the given config overrides, counting allocations from the
+// end of init to the end of the run (mapper thread joined). Returns the count.
+long count_allocations_after_init(std::initializer_list<const char*> overrides, ReplayJob* job) {
   ReplayOptions opt;
   const std::string seq = testing::source_path("data/tum_fr1_xyz_clip");
   const std::string config = testing::source_path("config/tum_fr1.conf");
@@ -99,25 +91,54 @@ TEST(Allocations, NoneWhileReplayingTheClipAfterInit) {
   opt.trajectory_path = trajectory.c_str();
   opt.progress = false;
   char* text = nullptr;
-  ASSERT_TRUE(read_text_file(config.c_str(), 1 << 20, &text).is_ok());
-  ASSERT_TRUE(parse_params(text, config.c_str(), &opt.params).is_ok());
+  EXPECT_TRUE(read_text_file(config.c_str(), 1 << 20, &text).is_ok());
+  EXPECT_TRUE(parse_params(text, config.c_str(), &opt.params).is_ok());
   delete[] text;
-  ReplayJob job;
-  ASSERT_TRUE(job.init(opt).is_ok());
-
+  for (const char* o : overrides) EXPECT_TRUE(set_param(o, "test", &opt.params).is_ok()) << o;
+  EXPECT_TRUE(job->init(opt).is_ok());
+  g_calls = 0;
+  g_bytes = 0;
   g_armed = true;  // init is complete: from here on, nothing may allocate
   int frames = 0;
-  while (job.step()) ++frames;
+  while (job->step()) ++frames;
+  EXPECT_TRUE(job->finish().is_ok());
   g_armed = false;
-
-  ASSERT_TRUE(job.finish().is_ok());
   EXPECT_EQ(frames, 50);
-  EXPECT_EQ(job.counters().tracked, 50u);
-  EXPECT_GT(job.counters().keyframes, 1u) << "keyframe creation must be part of the counted run";
-  EXPECT_EQ(g_calls.load(), 0) << g_bytes.load() << " bytes allocated after init";
+  EXPECT_EQ(job->counters().tracked, 50u);
+  EXPECT_GT(job->counters().keyframes, 1u) << "keyframe creation must be part of the counted run";
+  return g_calls.load();
+}
+
+TEST(Allocations, CounterSeesAllocations) {
+  // Without this, a zero below would prove nothing.
+  g_calls = 0;
+  g_armed = true;
+  g_escape = std::malloc(64);
+  std::free(g_escape);
+  g_escape = new int(3);
+  delete static_cast<int*>(g_escape);
+  g_armed = false;
+  EXPECT_EQ(g_calls.load(), 2) << "the malloc/new counters are not wired in";
+}
+
+TEST(Allocations, NoneWhileTrackingTheClipAfterInit) {
+  ReplayJob job;
+  const long calls = count_allocations_after_init({"map.enabled=false"}, &job);
+  EXPECT_EQ(calls, 0) << g_bytes.load() << " bytes allocated after init";
   std::printf(
-      "allocations after init over %d frames: %ld (%ld bytes); PNG arena high water %zu B\n",
-      frames, g_calls.load(), g_bytes.load(), job.source().png_arena_high_water());
+      "tracking only: %ld allocations after init over 50 frames; PNG arena high water %zu B\n",
+      calls, job.source().png_arena_high_water());
+}
+
+TEST(Allocations, NoneWithTheMapperSynchronousOrOnItsOwnThread) {
+  for (const char* mode : {"map.threaded=false", "map.threaded=true"}) {
+    ReplayJob job;
+    const long calls = count_allocations_after_init({"map.enabled=true", mode}, &job);
+    EXPECT_GT(job.mapper().counters().keyframes_mapped, 0u) << mode;
+    EXPECT_EQ(calls, 0) << mode << ": " << g_bytes.load() << " bytes allocated after init";
+    std::printf("%s: %u keyframes mapped, %ld allocations after init\n", mode,
+                job.mapper().counters().keyframes_mapped, calls);
+  }
 }
 
 }  // namespace

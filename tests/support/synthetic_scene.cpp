@@ -29,7 +29,7 @@ double texture(double u, double v, double phase) {
   return 0.5 + 0.28 * checker + 0.15 * blobs;
 }
 
-std::vector<Plane> scene_planes(bool with_box, double wall_z) {
+std::vector<Plane> scene_planes(bool with_box, bool with_room, double wall_z) {
   std::vector<Plane> planes;
   auto add = [&](Vector3d n, double d, Vector3d ua, Vector3d va, Vector3d lo, Vector3d hi,
                  double phase) {
@@ -39,9 +39,11 @@ std::vector<Plane> scene_planes(bool with_box, double wall_z) {
   const Vector3d X(1, 0, 0), Y(0, 1, 0), Z(0, 0, 1);
   add(-Z, -wall_z, X, Y, Vector3d(-inf, -inf, wall_z - 0.01), Vector3d(inf, inf, wall_z + 0.01),
       0.0);  // back wall
-  add(-Y, -0.7, X, Z, Vector3d(-inf, 0.69, -inf), Vector3d(inf, 0.71, inf), 1.0);   // floor
-  add(X, -1.3, Z, Y, Vector3d(-1.31, -inf, -inf), Vector3d(-1.29, inf, inf), 2.0);  // left wall
-  add(-X, -1.5, Z, Y, Vector3d(1.49, -inf, -inf), Vector3d(1.51, inf, inf), 5.0);   // right wall
+  if (with_room) {
+    add(-Y, -0.7, X, Z, Vector3d(-inf, 0.69, -inf), Vector3d(inf, 0.71, inf), 1.0);   // floor
+    add(X, -1.3, Z, Y, Vector3d(-1.31, -inf, -inf), Vector3d(-1.29, inf, inf), 2.0);  // left wall
+    add(-X, -1.5, Z, Y, Vector3d(1.49, -inf, -inf), Vector3d(1.51, inf, inf), 5.0);   // right wall
+  }
   if (with_box) {
     add(-Z, -1.6, X, Y, Vector3d(-0.5, -0.2, 1.59), Vector3d(0.1, 0.4, 1.61), 3.0);  // box front
     add(X, 0.1, Z, Y, Vector3d(0.09, -0.2, 1.6), Vector3d(0.11, 0.4, 2.2), 4.0);     // box side
@@ -57,8 +59,14 @@ SE3 SyntheticScene::pose_at(double t) {
   return SE3(so3_exp(w), p);
 }
 
+SE3 SyntheticScene::camera_at(double t) const {
+  if (!diagonal_path) return pose_at(t);
+  return SE3(so3_exp(Vector3d(0.01 * std::sin(2 * t), 0.01 * std::sin(3 * t), 0.0)),
+             Vector3d(0.45 * t, -0.45 * t, 0.05 * t));
+}
+
 SyntheticFrame SyntheticScene::render(const SE3& T_w_c) const {
-  const std::vector<Plane> planes = scene_planes(with_box, back_wall_z_m);
+  const std::vector<Plane> planes = scene_planes(with_box, with_room, back_wall_z_m);
   const int w = camera.width_px, h = camera.height_px;
   SyntheticFrame f;
   f.gray.resize(static_cast<size_t>(w) * h);
@@ -108,10 +116,12 @@ SyntheticFrame SyntheticScene::render(const SE3& T_w_c) const {
 
 const std::vector<SyntheticFrame>& SyntheticScene::render_path(int frames, double fps) const {
   // Tests of one binary share the renders of one path.
-  static std::map<std::tuple<int, int, double, bool, double, double>, std::vector<SyntheticFrame>> cache;
-  std::vector<SyntheticFrame>& out = cache[std::make_tuple(camera.width_px, frames, fps, with_box, back_wall_z_m, max_depth_m)];
+  using Key = std::tuple<int, int, double, bool, bool, bool, double, double>;
+  static std::map<Key, std::vector<SyntheticFrame>> cache;
+  std::vector<SyntheticFrame>& out = cache[Key(camera.width_px, frames, fps, with_box, with_room,
+                                               diagonal_path, back_wall_z_m, max_depth_m)];
   while (static_cast<int>(out.size()) < frames) {
-    out.push_back(render(pose_at(static_cast<double>(out.size()) / fps)));
+    out.push_back(render(camera_at(static_cast<double>(out.size()) / fps)));
   }
   return out;
 }

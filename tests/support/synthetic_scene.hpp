@@ -34,6 +34,11 @@ struct SyntheticScene {
   }
   // Smooth camera path: translation within ~10 cm and rotations within ~3 degrees.
   static SE3 pose_at(double t_s);
+  // The camera of render_path(): pose_at, or with diagonal_path a steady 45 cm/s glide right
+  // and up (so both edge orientations have parallax) with a slight forward drift.
+  bool diagonal_path = false;
+  SE3 camera_at(double t_s) const;
+  bool with_room = true;  // side walls and floor
 };
 
 }  // namespace rgbdtam::testing

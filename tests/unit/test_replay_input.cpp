@@ -5,12 +5,14 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <string>
 #include <vector>
 
 #include "replay_job.hpp"
 #include "rgbdtam/hal/file.hpp"
+#include "rgbdtam/hal/ply_map_writer.hpp"
 #include "rgbdtam/hal/tum_replay_source.hpp"
 #include "rgbdtam/hal/tum_timestamp.hpp"
 #include "test_paths.hpp"
@@ -199,6 +201,41 @@ TEST(ReplaySource, MissingFolderIsAClearError) {
   const Status s = src.open("/nonexistent/sequence", 640, 480, 20'000'000, 0);
   ASSERT_FALSE(s.is_ok());
   EXPECT_NE(std::string(s.message()).find("/nonexistent/sequence/rgb.txt"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace rgbdtam
+
+namespace rgbdtam {
+namespace {
+
+TEST(PlyMapWriter, WritesBinaryVerticesAndPatchesTheCount) {
+  const std::string path = testing::make_temp_dir("ply") + "/map.ply";
+  FixedVector<FusedPixel> pixels;
+  pixels.reserve_once(4);
+  ASSERT_TRUE(pixels.push_back({100, 50, 0.5f, 0.01f, 1.0f, DepthSource::kSensor}));
+  ASSERT_TRUE(pixels.push_back({320, 240, 0.25f, 0.01f, 0.5f, DepthSource::kMultiView}));
+  const PinholeIntrinsics k{500, 500, 320, 240, 640, 480};
+  PlyMapWriter ply;
+  ASSERT_TRUE(ply.open(path.c_str()).is_ok());
+  ply.on_keyframe_map(0, SE3(), k, pixels);
+  ply.on_keyframe_map(1, SE3(Eigen::Quaterniond::Identity(), Vector3d(1, 0, 0)), k, pixels);
+  ASSERT_TRUE(ply.close().is_ok());
+  std::ifstream in(path, std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(bytes.find("format binary_little_endian 1.0"), std::string::npos);
+  EXPECT_NE(bytes.find("element vertex 0000000004\n"), std::string::npos);
+  const size_t body = bytes.find("end_header\n") + std::strlen("end_header\n");
+  ASSERT_EQ(bytes.size() - body, 4u * 15u);
+  // Vertex 1: pixel (320, 240) at 4 m is (0, 0, 4), grey 128 (0.5, rounded).
+  float xyz[3];
+  std::memcpy(xyz, bytes.data() + body + 15, sizeof(xyz));
+  EXPECT_FLOAT_EQ(xyz[0], 0.f);
+  EXPECT_FLOAT_EQ(xyz[2], 4.f);
+  EXPECT_EQ(static_cast<uint8_t>(bytes[body + 15 + 12]), 128);
+  // Vertex 3 is the same pixel seen from a keyframe 1 m to the right.
+  std::memcpy(xyz, bytes.data() + body + 3 * 15, sizeof(xyz));
+  EXPECT_FLOAT_EQ(xyz[0], 1.f);
 }
 
 }  // namespace

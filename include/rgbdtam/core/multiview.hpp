@@ -13,16 +13,16 @@
 namespace rgbdtam {
 
 struct MultiViewOptions {
-  int max_seeds = 10000;          // edge pixels mapped per keyframe
-  int max_observations = 12;      // per seed
-  int min_observations = 3;       // for a multi-view estimate
-  float min_gradient = 0.028f;    // |gx|+|gy| per pixel in [0,1] units (7 grey levels; code)
+  int max_seeds = 10000;        // edge pixels mapped per keyframe
+  int max_observations = 12;    // per seed
+  int min_observations = 3;     // for a multi-view estimate
+  float min_gradient = 0.028f;  // |gx|+|gy| per pixel in [0,1] units (7 grey levels; code)
   int border_px = 12;
-  float max_mean_sad = 25.f;      // grey levels per patch sample (code)
-  float min_parallax = 0.005f;    // |baseline * rho|: below it the ray angle is too small (code)
-  float min_alignment = 0.3f;     // |gradient . epipolar| of unit vectors (code)
-  float max_search_px = 160.f;    // longer epipolar segments are skipped (rows / 3; code)
-  float max_inverse_depth = 4.f;  // 1/m: nearest depth 0.25 m
+  float max_mean_sad = 25.f;        // grey levels per patch sample (code)
+  float min_parallax = 0.005f;      // |baseline * rho|: below it the ray angle is too small (code)
+  float min_alignment = 0.3f;       // |gradient . epipolar| of unit vectors (code)
+  float max_search_px = 160.f;      // longer epipolar segments are skipped (rows / 3; code)
+  float max_inverse_depth = 4.f;    // 1/m: nearest depth 0.25 m, when the sensor sees nothing
   float min_inverse_depth = 0.02f;  // 1/m: farthest depth 50 m
   float consistency_sigmas = 2.f;   // an observation agrees within this many sigmas
 };
@@ -30,10 +30,10 @@ struct MultiViewOptions {
 enum class DepthSource : uint8_t { kNone = 0, kSensor = 1, kMultiView = 2, kFused = 3 };
 
 struct FusedPixel {
-  int16_t x, y;       // level-0 pixel
-  float rho;          // 1/m
-  float sigma;        // 1/m
-  float intensity;    // [0,1]
+  int16_t x, y;     // level-0 pixel
+  float rho;        // 1/m
+  float sigma;      // 1/m
+  float intensity;  // [0,1]
   DepthSource source;
 };
 
@@ -41,9 +41,11 @@ class SeedMap {
  public:
   void allocate(const PinholeIntrinsics& k, const MultiViewOptions& opt);
   // Starts mapping a keyframe: its undistorted grey image and sensor inverse depth (0 = none)
-  // at level 0, its Canny edges, and its pose. The images must outlive the mapping.
+  // at level 0, its Canny edges, and its pose. The images must outlive the mapping. Seeds are
+  // searched up to max_inverse_depth (1/m): half the depth of the nearest thing the keyframe
+  // sees, as in the authors' code, so that the first epipolar segments stay short.
   void reset(const ImageF& gray, const ImageF& sensor_inverse_depth, const ImageU8& edges,
-             const SE3& T_w_k);
+             const SE3& T_w_k, float max_inverse_depth);
   // Searches every seed along its epipolar line in a later frame; returns accepted observations.
   int observe(const ImageF& gray, const SE3& T_w_c);
   // Inverse-variance fusion of each seed's consistent observations with the sensor depth
@@ -61,10 +63,10 @@ class SeedMap {
  private:
   struct Seed {
     int16_t x, y;
-    float gx, gy;        // unit image gradient
+    float gx, gy;          // unit image gradient
     float rho_lo, rho_hi;  // current search interval, 1/m
-    float sensor_rho;    // 0 when the sensor has none
-    int16_t count;       // observations in this seed's slots of observations_
+    float sensor_rho;      // 0 when the sensor has none
+    int16_t count;         // observations in this seed's slots of observations_
   };
   struct Observation {
     float rho, sigma;

@@ -73,8 +73,10 @@ class KeyframeBuilder {
  public:
   void allocate(const PinholeIntrinsics& finest, const TrackerOptions& opt);
   void allocate_keyframe(Keyframe* kf) const;
+  // photometric_depth, when given, replaces the frame's sensor depth for the photometric points
+  // (the geometric points always use the sensor's).
   void build(const FramePyramid& frame, uint32_t id, int64_t timestamp_ns, const SE3& T_w_k,
-             Keyframe* kf);
+             Keyframe* kf, const FramePyramid* photometric_depth = nullptr);
   // Photometric points only, into sets[0 .. kPyramidLevels), from the frame's (fused) depth.
   void build_photometric(const FramePyramid& frame, FixedVector<TrackPoint>* sets);
   // Level-0 Canny edges of the last prepared frame.
@@ -83,7 +85,8 @@ class KeyframeBuilder {
 
  private:
   void prepare(const FramePyramid& frame);  // edges, gradients and thresholds of every level
-  void select_photometric(const FramePyramid& frame, int level, FixedVector<TrackPoint>* out);
+  void select_photometric(const FramePyramid& frame, const FramePyramid& depth, int level,
+                          FixedVector<TrackPoint>* out);
   void select_geometric(const FramePyramid& frame, int level, FixedVector<TrackPoint>* out);
   bool is_semidense_pixel(int level, int x, int y) const;
 

@@ -54,7 +54,7 @@ class MapperQueue {
 class MapSink {
  public:
   virtual ~MapSink() = default;
-  virtual void on_keyframe_map(const SE3& T_w_k, const PinholeIntrinsics& k,
+  virtual void on_keyframe_map(int64_t timestamp_ns, const SE3& T_w_k, const PinholeIntrinsics& k,
                                const FixedVector<FusedPixel>& pixels) = 0;
 };
 
@@ -63,9 +63,9 @@ using ClockFn = int64_t (*)();
 struct MappingCounters {
   uint32_t keyframes_mapped = 0;
   uint32_t frames_observed = 0;
-  uint64_t points_sensor = 0;      // edge pixels whose depth is the sensor's alone
-  uint64_t points_multiview = 0;   // ... multi-view alone (the sensor saw nothing there)
-  uint64_t points_fused = 0;       // ... both, fused by inverse variance
+  uint64_t points_sensor = 0;     // edge pixels whose depth is the sensor's alone
+  uint64_t points_multiview = 0;  // ... multi-view alone (the sensor saw nothing there)
+  uint64_t points_fused = 0;      // ... both, fused by inverse variance
 };
 
 class MappingModule {
@@ -78,22 +78,32 @@ class MappingModule {
   const LatencyStats& time_per_keyframe() const { return per_keyframe_; }
 
  private:
-  void finalize();
+  // One keyframe being mapped. A keyframe stays open after the next one arrives, until its
+  // own frame budget is spent, so that quickly replaced keyframes are still triangulated.
+  struct Job {
+    Keyframe* keyframe = nullptr;  // null when the slot is free
+    SeedMap seeds;
+    ImageF gray;                  // the keyframe's level-0 image, for matching
+    ImageF sensor_inverse_depth;  // the keyframe's own
+    SE3 T_w_last_used;
+    float median_depth_m = 1.f;
+    int frames_used = 0;
+    uint64_t started = 0;  // arrival order
+    int64_t spent_ns = 0;
+  };
+  static constexpr int kOpenKeyframes = 3;
+  void start(Job* job, const MapperFrame& frame);
+  void finalize(Job* job);
 
   Params params_;
   MultiViewOptions mv_;
   ClockFn clock_ = nullptr;
   MapSink* sink_ = nullptr;
-  SeedMap seeds_;
+  Job jobs_[kOpenKeyframes];
+  uint64_t arrivals_ = 0;
   KeyframeBuilder builder_;
-  FramePyramid fused_;           // the keyframe's grey pyramid and fused inverse depth
-  ImageF sensor_inverse_depth_;  // the keyframe's own, kept for the seeds
+  FramePyramid fused_;  // the finishing keyframe's grey pyramid and fused inverse depth
   FixedVector<FusedPixel> pixels_;
-  Keyframe* keyframe_ = nullptr;  // being mapped
-  SE3 T_w_last_used_;
-  float median_depth_m_ = 1.f;
-  int frames_used_ = 0;
-  int64_t spent_ns_ = 0;
   MappingCounters counters_;
   LatencyStats per_keyframe_;
 };

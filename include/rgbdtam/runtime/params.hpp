@@ -32,14 +32,16 @@ struct Params {
   int keyframe_pool_size = 32;
   int reuse_candidates = 2;  // nearest earlier keyframes tried before creating a new one
   int lost_frames_before_reset = 10;
-  bool map_enabled = true;             // multi-view mapping of each new keyframe
-  bool map_threaded = false;           // the mapper on its own thread (replay: synchronous)
-  int map_queue_frames = 4;            // tracker -> mapper queue slots
-  int map_frames_per_keyframe = 10;    // frames triangulated per keyframe (code)
+  // Multi-view mapping of each new keyframe. Off by default until the mapping issue is done:
+  // on fr1_xyz it is neutral (0.88-0.89 cm), and the far-wall hand-over is not yet robust.
+  bool map_enabled = false;
+  bool map_threaded = false;         // the mapper on its own thread (replay: synchronous)
+  int map_queue_frames = 4;          // tracker -> mapper queue slots
+  int map_frames_per_keyframe = 10;  // frames triangulated per keyframe (code)
   // Spacing of triangulated frames relative to the median depth. All-frames ATE on fr1_xyz:
   // 0.91 cm at 0.005 and 0.01, 0.88 at 0.02, 0.87 at 0.03 (0.88 without mapping).
   double map_min_baseline_ratio = 0.03;
-  int map_seeds = 10000;               // edge pixels mapped per keyframe
+  int map_seeds = 10000;  // edge pixels mapped per keyframe
 };
 
 // Parses `key = value` lines (# comments). `source` names the file in errors.

@@ -17,7 +17,7 @@ struct TrackingCounters {
   uint32_t without_depth = 0;
   uint32_t keyframes = 0;
   uint32_t resets = 0;
-  uint32_t reused = 0;  // keyframe switches that reused an earlier keyframe
+  uint32_t reused = 0;                    // keyframe switches that reused an earlier keyframe
   uint32_t mapper_dropped_frames = 0;     // the mapper queue was full
   uint32_t mapper_dropped_keyframes = 0;  // ... on a new keyframe: it keeps its sensor map
 };
@@ -37,11 +37,13 @@ class TrackingPipeline {
   void start_keyframe(const SensorFrame& frame, const SE3& T_w_c, PoseEstimate* out);
   SE3 predict_pose() const;
   void offer_to_mapper(const PoseEstimate& pose, bool new_keyframe);
+  void propagate_map(const Keyframe& from, const SE3& T_w_c);
   bool reuse_keyframe(const SE3& T_w_c, PoseEstimate* out);
 
   Params params_;
   Undistorter undistorter_;
   FramePyramid pyramid_;
+  FramePyramid propagated_;  // sensor depth plus the previous keyframe's map (photometric only)
   ImageU16 depth_undistorted_;
   KeyframeBuilder builder_;
   KeyframePool pool_;

@@ -1,0 +1,51 @@
+#!/usr/bin/env python3
+"""Opens a map PLY written by `rgbdtam replay --map` with Open3D (Debian: python3-open3d),
+prints what it holds, and renders it to a PNG (matplotlib) so a person can look at it.
+
+usage: tools/check_map.py map.ply [out.png]
+Exit status 1 when Open3D cannot read the file or it holds no points.
+"""
+import sys
+
+import numpy as np
+import open3d as o3d
+
+
+def main() -> int:
+    if len(sys.argv) < 2:
+        print(__doc__)
+        return 2
+    cloud = o3d.io.read_point_cloud(sys.argv[1])
+    points = np.asarray(cloud.points)
+    if len(points) == 0:
+        print(f"{sys.argv[1]}: Open3D read no points")
+        return 1
+    colours = np.asarray(cloud.colors)
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    print(f"{sys.argv[1]}: {len(points)} points, colours {'yes' if len(colours) else 'no'}")
+    print(f"  bounds x [{lo[0]:.2f}, {hi[0]:.2f}]  y [{lo[1]:.2f}, {hi[1]:.2f}]  z [{lo[2]:.2f}, {hi[2]:.2f}] m")
+    print(f"  median distance from the first camera {np.median(np.linalg.norm(points, axis=1)):.2f} m")
+    if len(sys.argv) > 2:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        # Seen from the first keyframe's camera (x right, y down, z forward), points within 4 m.
+        keep = (points[:, 2] > 0.1) & (points[:, 2] < 4.0)
+        p, c = points[keep], (colours[keep] if len(colours) else None)
+        u, v = p[:, 0] / p[:, 2], p[:, 1] / p[:, 2]
+        fig, axes = plt.subplots(1, 2, figsize=(14, 6))
+        axes[0].scatter(u, -v, s=0.2, c=c, marker=".")
+        axes[0].set_title("seen from the first keyframe")
+        axes[0].set_aspect("equal")
+        axes[1].scatter(p[:, 0], -p[:, 2], s=0.2, c=c, marker=".")
+        axes[1].set_title("from above (x, z)")
+        axes[1].set_aspect("equal")
+        for ax in axes:
+            ax.set_facecolor("#3060a0")
+        fig.savefig(sys.argv[2], dpi=110, bbox_inches="tight")
+        print(f"  rendered {sys.argv[2]}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
