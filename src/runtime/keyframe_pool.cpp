@@ -2,13 +2,17 @@
 
 namespace rgbdtam {
 
-void KeyframePool::allocate(int capacity, const KeyframeBuilder& builder) {
+void KeyframePool::allocate(int capacity, const KeyframeBuilder& builder,
+                            int map_points_per_keyframe) {
   RGBDTAM_ASSERT(capacity >= 3,
                  "a keyframe pool needs the reference, the mapped one and a new one");
   capacity_ = capacity;
   slots_.reset(new Keyframe[static_cast<size_t>(capacity)]);
   age_.reset(new uint64_t[static_cast<size_t>(capacity)]());
-  for (int i = 0; i < capacity; ++i) builder.allocate_keyframe(&slots_[i]);
+  for (int i = 0; i < capacity; ++i) {
+    builder.allocate_keyframe(&slots_[i]);
+    slots_[i].map_points.reserve_once(map_points_per_keyframe);
+  }
 }
 
 Keyframe* KeyframePool::acquire(const Keyframe* keep) {

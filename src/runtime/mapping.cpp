@@ -166,6 +166,14 @@ void MappingModule::finalize(Job* job) {
   fused_.build_inverse_depth_levels();
   Keyframe* kf = job->keyframe;
   builder_.build_photometric(fused_, kf->inactive_photometric());
+  kf->map_points.clear();
+  const PinholeIntrinsics& k = fused_.intrinsics(0);
+  for (const FusedPixel& p : pixels_) {
+    const float z = 1.f / p.rho;
+    (void)kf->map_points.push_back(
+        {(p.x - static_cast<float>(k.cx_px)) / static_cast<float>(k.fx_px) * z,
+         (p.y - static_cast<float>(k.cy_px)) / static_cast<float>(k.fy_px) * z, z});
+  }
   kf->map_ready.store(true, std::memory_order_release);
   kf->being_mapped.store(false, std::memory_order_release);
   if (sink_ != nullptr) {

@@ -14,7 +14,9 @@ Status TrackingPipeline::init(const Params& params) {
   propagated_.allocate(params_.camera, params_.sensor.depth_factor, params_.sensor.depth_range);
   depth_undistorted_.allocate(params_.camera.width_px, params_.camera.height_px);
   builder_.allocate(params_.camera, params_.tracker);
-  pool_.allocate(params_.keyframe_pool_size, builder_);
+  const int map_points = params_.map_enabled ? params_.map_seeds : 0;
+  pool_.allocate(params_.keyframe_pool_size, builder_, map_points);
+  for (LocalMap& m : local_maps_) m.points.reserve_once(map_points);
   Keyframe model;
   builder_.allocate_keyframe(&model);
   tracker_.allocate(model, params_.tracker);
@@ -60,7 +62,7 @@ bool TrackingPipeline::reuse_keyframe(const SE3& T_w_c, PoseEstimate* out) {
   Keyframe* best = nullptr;
   double best_overlap = params_.tracker.keyframe_overlap;
   for (int i = 0; i < count; ++i) {
-    candidates[i]->adopt_map();
+    adopt_map(candidates[i]);
     const double overlap =
         tracker_.overlap_at(*candidates[i], pyramid_, candidates[i]->T_w_k.inverse() * T_w_c);
     if (overlap >= best_overlap) {
@@ -90,8 +92,8 @@ void TrackingPipeline::start_keyframe(const SensorFrame& frame, const SE3& T_w_c
   Keyframe* kf = pool_.acquire(reference_);
   // With mapping, the new keyframe starts with the previous one's map where its sensor is
   // blind (the authors' "local map"), until its own multi-view map replaces it.
-  const bool propagate = mapper_queue_ != nullptr && reference_ != nullptr;
-  if (propagate) propagate_map(*reference_, T_w_c);
+  const bool propagate = mapper_queue_ != nullptr;
+  if (propagate) propagate_map(T_w_c);
   builder_.build(pyramid_, next_keyframe_id_++, frame.timestamp_ns, T_w_c, kf,
                  propagate ? &propagated_ : nullptr);
   reference_ = kf;
@@ -137,7 +139,7 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
     return out;
   }
 
-  reference_->adopt_map();
+  adopt_map(reference_);
   const SE3 T_w_guess = predict_pose();
   const TrackResult r =
       tracker_.track(*reference_, pyramid_, reference_->T_w_k.inverse() * T_w_guess);
@@ -177,21 +179,31 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
   return out;
 }
 
-void TrackingPipeline::propagate_map(const Keyframe& from, const SE3& T_w_c) {
+void TrackingPipeline::adopt_map(Keyframe* kf) {
+  if (!kf->adopt_map()) return;
+  LocalMap& m = local_maps_[next_local_map_];
+  next_local_map_ = (next_local_map_ + 1) % 2;
+  m.T_w_k = kf->T_w_k;
+  m.points.clear();
+  for (const MapPoint& p : kf->map_points) (void)m.points.push_back(p);
+}
+
+void TrackingPipeline::propagate_map(const SE3& T_w_c) {
   ImageF& map = propagated_.inverse_depth_level0();
   const ImageF& sensor = pyramid_.inverse_depth(0);
   std::memcpy(map.data(), sensor.data(), sizeof(float) * static_cast<size_t>(map.size()));
-  const SE3 T_c_k = T_w_c.inverse() * from.T_w_k;
   const PinholeIntrinsics& k = pyramid_.intrinsics(0);
-  for (const TrackPoint& p : from.photometric(0)) {
-    const Vector3d q = T_c_k * Vector3d(p.x, p.y, p.z);
-    if (q.z() < 0.05) continue;
-    const long u = std::lround(k.fx_px * q.x() / q.z() + k.cx_px);
-    const long v = std::lround(k.fy_px * q.y() / q.z() + k.cy_px);
-    if (u < 0 || v < 0 || u >= map.width() || v >= map.height()) continue;
-    const float rho = static_cast<float>(1.0 / q.z());
-    if (sensor.at(u, v) > 0.f) continue;         // the sensor's own reading wins
-    map.at(u, v) = std::max(map.at(u, v), rho);  // the nearest point occludes
+  for (const LocalMap& local : local_maps_) {
+    const SE3 T_c_k = T_w_c.inverse() * local.T_w_k;
+    for (const MapPoint& p : local.points) {
+      const Vector3d q = T_c_k * Vector3d(p.x, p.y, p.z);
+      if (q.z() < 0.05) continue;
+      const long u = std::lround(k.fx_px * q.x() / q.z() + k.cx_px);
+      const long v = std::lround(k.fy_px * q.y() / q.z() + k.cy_px);
+      if (u < 0 || v < 0 || u >= map.width() || v >= map.height()) continue;
+      if (sensor.at(u, v) > 0.f) continue;  // the sensor's own reading wins
+      map.at(u, v) = std::max(map.at(u, v), static_cast<float>(1.0 / q.z()));  // nearest wins
+    }
   }
   propagated_.build_inverse_depth_levels();
 }

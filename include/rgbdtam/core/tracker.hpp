@@ -43,6 +43,11 @@ struct TrackPoint {
 // A keyframe's residual points. Its photometric points are double-buffered: the mapper writes
 // the fused map into the inactive set once and raises map_ready; the tracker's thread adopts
 // it between frames (adopt_map), so neither ever waits for the other.
+// A point of a keyframe's mapped depth, in the keyframe's camera frame, m.
+struct MapPoint {
+  float x, y, z;
+};
+
 struct Keyframe {
   uint32_t id = 0;
   int64_t timestamp_ns = 0;
@@ -52,6 +57,7 @@ struct Keyframe {
   std::atomic<int> active_photometric{0};
   std::atomic<bool> map_ready{false};     // mapper -> tracker: the inactive set is the new map
   std::atomic<bool> being_mapped{false};  // the pool must not recycle it
+  FixedVector<MapPoint> map_points;       // the mapper's fused edge map, set with map_ready
 
   const FixedVector<TrackPoint>& photometric(int level) const {
     return photometric_sets[active_photometric.load(std::memory_order_relaxed)][level];
@@ -59,12 +65,12 @@ struct Keyframe {
   FixedVector<TrackPoint>* inactive_photometric() {
     return photometric_sets[1 - active_photometric.load(std::memory_order_acquire)];
   }
-  // Tracker thread, between frames.
-  void adopt_map() {
-    if (map_ready.exchange(false, std::memory_order_acq_rel)) {
-      active_photometric.store(1 - active_photometric.load(std::memory_order_relaxed),
-                               std::memory_order_release);
-    }
+  // Tracker thread, between frames. True when a new map was adopted.
+  bool adopt_map() {
+    if (!map_ready.exchange(false, std::memory_order_acq_rel)) return false;
+    active_photometric.store(1 - active_photometric.load(std::memory_order_relaxed),
+                             std::memory_order_release);
+    return true;
   }
 };
 

@@ -9,7 +9,7 @@ namespace rgbdtam {
 
 class KeyframePool {
  public:
-  void allocate(int capacity, const KeyframeBuilder& builder);
+  void allocate(int capacity, const KeyframeBuilder& builder, int map_points_per_keyframe);
   // Returns a slot for a new keyframe; never the one at `keep`.
   Keyframe* acquire(const Keyframe* keep);
   int size() const { return used_; }

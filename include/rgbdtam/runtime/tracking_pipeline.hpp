@@ -37,13 +37,21 @@ class TrackingPipeline {
   void start_keyframe(const SensorFrame& frame, const SE3& T_w_c, PoseEstimate* out);
   SE3 predict_pose() const;
   void offer_to_mapper(const PoseEstimate& pose, bool new_keyframe);
-  void propagate_map(const Keyframe& from, const SE3& T_w_c);
+  void propagate_map(const SE3& T_w_c);
+  void adopt_map(Keyframe* kf);
   bool reuse_keyframe(const SE3& T_w_c, PoseEstimate* out);
 
   Params params_;
   Undistorter undistorter_;
   FramePyramid pyramid_;
-  FramePyramid propagated_;  // sensor depth plus the previous keyframe's map (photometric only)
+  FramePyramid propagated_;  // sensor depth plus the local maps (photometric points only)
+  // The last two keyframe maps the tracker adopted (the authors' "local maps"), in the world.
+  struct LocalMap {
+    FixedVector<MapPoint> points;  // keyframe frame
+    SE3 T_w_k;
+  };
+  LocalMap local_maps_[2];
+  int next_local_map_ = 0;
   ImageU16 depth_undistorted_;
   KeyframeBuilder builder_;
   KeyframePool pool_;
