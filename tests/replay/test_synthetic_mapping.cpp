@@ -100,14 +100,7 @@ TEST(SyntheticMapping, FarWallBeyondSensorRangeIsMappedAndTrackingContinuesOnIt)
   int tracked = 0, frames_without_box = 0;
   for (int i = 0; i < kFrames; ++i) {
     const testing::SyntheticFrame& f = frames[static_cast<size_t>(i)];
-    SensorFrame frame;
-    frame.sequence = static_cast<uint32_t>(i);
-    frame.timestamp_ns = static_cast<int64_t>(std::llround(i / kFps * 1e9));
-    frame.gray = f.gray.data();
-    frame.depth = f.depth.data();
-    frame.width_px = scene.camera.width_px;
-    frame.height_px = scene.camera.height_px;
-    const PoseEstimate pose = slam.process(frame);
+    const PoseEstimate pose = slam.process(f.as_sensor_frame(scene.camera, i, kFps));
     if ((pose.flags & kPoseValid) == 0) continue;
     ++tracked;
     const SE3 truth = T_w0.inverse() * scene.camera_at(i / kFps);

@@ -44,14 +44,7 @@ PathError track_synthetic(const char* residuals, int frames, double fps) {
     const double t = i / fps;
     const SE3 T_w_c = testing::SyntheticScene::pose_at(t);
     const testing::SyntheticFrame& f = rendered[static_cast<size_t>(i)];
-    SensorFrame frame;
-    frame.sequence = static_cast<uint32_t>(i);
-    frame.timestamp_ns = static_cast<int64_t>(t * 1e9);
-    frame.gray = f.gray.data();
-    frame.depth = f.depth.data();
-    frame.width_px = scene.camera.width_px;
-    frame.height_px = scene.camera.height_px;
-    const PoseEstimate pose = pipeline.process(frame);
+    const PoseEstimate pose = pipeline.process(f.as_sensor_frame(scene.camera, i, fps));
     if ((pose.flags & kPoseValid) == 0) continue;
     ++err.tracked;
     const SE3 truth = T_w0.inverse() * T_w_c;  // world = first camera

@@ -3,17 +3,30 @@
 // ray-cast into a pinhole camera, one ray per pixel centre. The texture's edges are about a
 // pixel and a half wide at these distances, so the images need no supersampling; depth is exact.
 
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
 #include "rgbdtam/core/camera.hpp"
 #include "rgbdtam/core/se3.hpp"
+#include "rgbdtam/runtime/messages.hpp"
 
 namespace rgbdtam::testing {
 
 struct SyntheticFrame {
   std::vector<uint8_t> gray;
   std::vector<uint16_t> depth;  // depth_factor units; 0 = no measurement
+  // The frame as a sensor source delivers it: frame index i of a sequence at fps.
+  SensorFrame as_sensor_frame(const PinholeIntrinsics& k, int i, double fps) const {
+    SensorFrame frame;
+    frame.sequence = static_cast<uint32_t>(i);
+    frame.timestamp_ns = static_cast<int64_t>(std::llround(i / fps * 1e9));
+    frame.gray = gray.data();
+    frame.depth = depth.data();
+    frame.width_px = k.width_px;
+    frame.height_px = k.height_px;
+    return frame;
+  }
 };
 
 struct SyntheticScene {
