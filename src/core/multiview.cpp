@@ -212,9 +212,12 @@ void SeedMap::fuse(float sigma_sensor, FixedVector<FusedPixel>* out) const {
         weighted += w * obs[j].rho;
         ++agree;
       }
-      if (agree >= opt_.min_observations && agree * 5 >= n * 3) {
-        f.rho = static_cast<float>(weighted / info);
-        f.sigma = static_cast<float>(1.0 / std::sqrt(info));
+      const float rho = static_cast<float>(weighted / info);
+      const float sigma = static_cast<float>(1.0 / std::sqrt(info));
+      if (agree >= opt_.min_observations && agree * 5 >= n * 3 &&
+          sigma <= opt_.max_relative_sigma * rho) {
+        f.rho = rho;
+        f.sigma = sigma;
         f.source = DepthSource::kMultiView;
       }
     }
