@@ -235,6 +235,14 @@ Status check_consistency(const char* source, const Params& p) {
                          "%s: key 'depth.min' (%g) must be below 'depth.max' (%g)", source,
                          p.sensor.depth_range.min_m, p.sensor.depth_range.max_m);
   }
+  // The reference, three keyframes being mapped, one per queue slot, and a free one.
+  const int pool_needed = p.map_queue_frames + 5;
+  if (p.map_enabled && p.keyframe_pool_size < pool_needed) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "%s: key 'map.keyframe_pool' (%d) must be at least map.queue_frames + 5 "
+                         "(%d) when mapping is enabled",
+                         source, p.keyframe_pool_size, pool_needed);
+  }
   if (p.tracker.canny_low > p.tracker.canny_high) {
     return Status::error(StatusCode::kInvalidArgument,
                          "%s: key 'tracker.canny_low' must not exceed 'tracker.canny_high'",

@@ -75,6 +75,8 @@ TEST(Params, BadValuesNameTheFileAndTheKey) {
   expect_error(std::string(kMinimal) + "camera.width = 636\n", "divisible by 8");
   expect_error(std::string(kMinimal) + "depth.min = 4\ndepth.max = 2\n", "'depth.min'");
   expect_error(std::string(kMinimal) + "camera.fx = nan\n", "is not a number");
+  expect_error(std::string(kMinimal) + "map.enabled = true\nmap.keyframe_pool = 6\n",
+               "'map.keyframe_pool'");
 }
 
 TEST(Params, ErrorsGiveTheLineNumber) {

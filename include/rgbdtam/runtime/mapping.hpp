@@ -91,7 +91,7 @@ class MappingModule {
     uint64_t started = 0;  // arrival order
     int64_t spent_ns = 0;
   };
-  static constexpr int kOpenKeyframes = 3;
+  static constexpr int kOpenKeyframes = 3;  // params.cpp sizes the keyframe pool for this
   void start(Job* job, const MapperFrame& frame);
   void finalize(Job* job);
 
