@@ -37,7 +37,6 @@ class ReplayJob {
   const LatencyStats& tracking_time() const { return tracking_ms_; }
   const LatencyStats& frame_time() const { return frame_ms_; }
   const TumReplaySource& source() const { return source_; }
-  const PoseEstimate& last_pose() const { return last_pose_; }
   const MappingModule& mapper() const { return system_.mapper(); }
 
  private:

@@ -110,7 +110,7 @@ void KeyframeBuilder::build_photometric(const FramePyramid& frame, FixedVector<T
 }
 
 void KeyframeBuilder::prepare(const FramePyramid& frame) {
-  edge_count_ = canny_.detect(frame.gray(0), opt_.canny_low, opt_.canny_high, &edges_[0]);
+  canny_.detect(frame.gray(0), opt_.canny_low, opt_.canny_high, &edges_[0]);
   for (int l = 0; l < kPyramidLevels; ++l) {
     compute_gradients(frame.gray(l), &gx_[l], &gy_[l]);
     compute_depth_gradients(frame.inverse_depth(l), &dgx_[l], &dgy_[l]);

@@ -46,7 +46,6 @@ void SeedMap::reset(const ImageF& gray, const ImageF& sensor_inverse_depth, cons
                     const SE3& T_w_k, float max_inverse_depth) {
   gray_ = &gray;
   T_w_k_ = T_w_k;
-  frames_ = 0;
   seeds_.clear();
   observations_.clear();
   const int w = gray.width(), h = gray.height(), b = opt_.border_px;
@@ -186,7 +185,6 @@ int SeedMap::observe(const ImageF& gray, const SE3& T_w_c) {
     s.rho_hi = std::max(s.rho_lo, std::min(s.rho_hi, o.rho + kIntervalSigmas * o.sigma));
     ++accepted;
   }
-  ++frames_;
   return accepted;
 }
 

@@ -58,11 +58,6 @@ class SeedMap {
   void fuse(float sigma_sensor, FixedVector<FusedPixel>* out) const;
 
   int seed_count() const { return seeds_.size(); }
-  void seed_pixel(int i, int* x, int* y) const {
-    *x = seeds_[i].x;
-    *y = seeds_[i].y;
-  }
-  int frames_observed() const { return frames_; }
   const SE3& T_w_k() const { return T_w_k_; }
 
  private:
@@ -84,7 +79,6 @@ class SeedMap {
   FixedVector<Observation> observations_;  // max_observations slots per seed
   const ImageF* gray_ = nullptr;
   SE3 T_w_k_;
-  int frames_ = 0;
 };
 
 }  // namespace rgbdtam

@@ -87,7 +87,6 @@ class KeyframeBuilder {
   void build_photometric(const FramePyramid& frame, FixedVector<TrackPoint>* sets);
   // Level-0 Canny edges of the last prepared frame.
   const ImageU8& edges() const { return edges_[0]; }
-  int edge_count() const { return edge_count_; }
 
  private:
   void prepare(const FramePyramid& frame);  // edges, gradients and thresholds of every level
@@ -102,7 +101,6 @@ class KeyframeBuilder {
   ImageF gx_[kPyramidLevels], gy_[kPyramidLevels];
   ImageF dgx_[kPyramidLevels], dgy_[kPyramidLevels];
   float gradient_threshold_[kPyramidLevels] = {};
-  int edge_count_ = 0;
 };
 
 enum class TrackingState : uint8_t { kOk = 0, kLost = 1 };

@@ -21,7 +21,6 @@ class SlamSystem {
 
   const TrackingPipeline& tracking() const { return tracking_; }
   const MappingModule& mapper() const { return mapper_; }
-  bool mapping() const { return params_.map_enabled; }
 
  private:
   Params params_;
