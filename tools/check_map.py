@@ -1,9 +1,10 @@
-#!/usr/bin/env python3
+#!/usr/bin/python3
 """Opens a map PLY written by `rgbdtam replay --map` with Open3D (Debian: python3-open3d),
 prints what it holds, and renders it to a PNG (matplotlib) so a person can look at it.
 
-usage: tools/check_map.py map.ply [out.png]
-Exit status 1 when Open3D cannot read the file or it holds no points.
+usage: tools/check_map.py map.ply [out.png] [--expect-desk]
+Exit status 1 when Open3D cannot read the file or it holds no points; with --expect-desk,
+also when the map's largest plane is not a desk (see desk_found).
 """
 import sys
 
@@ -11,10 +12,24 @@ import numpy as np
 import open3d as o3d
 
 
+def desk_found(cloud) -> bool:
+    """The largest plane (Open3D RANSAC, 1 cm) holds a quarter of the map or more, faces the
+    first camera's vertical axis within 60 degrees, and lies 0.3-2 m from it: a table top."""
+    (a, b, c, d), inliers = cloud.segment_plane(distance_threshold=0.01, ransac_n=3,
+                                                num_iterations=1000)
+    share = len(inliers) / len(cloud.points)
+    print(f"  largest plane: {100 * share:.0f} % of the points, normal ({a:.2f}, {b:.2f}, {c:.2f}),"
+          f" {abs(d):.2f} m from the first camera")
+    return share >= 0.25 and abs(b) >= 0.5 and 0.3 <= abs(d) <= 2.0
+
+
 def main() -> int:
-    if len(sys.argv) < 2:
+    expect_desk = "--expect-desk" in sys.argv
+    args = [a for a in sys.argv[1:] if a != "--expect-desk"]
+    if not args:
         print(__doc__)
         return 2
+    sys.argv[1:] = args
     cloud = o3d.io.read_point_cloud(sys.argv[1])
     points = np.asarray(cloud.points)
     if len(points) == 0:
@@ -44,6 +59,9 @@ def main() -> int:
             ax.set_facecolor("#3060a0")
         fig.savefig(sys.argv[2], dpi=110, bbox_inches="tight")
         print(f"  rendered {sys.argv[2]}")
+    if expect_desk and not desk_found(cloud):
+        print("  no desk: the largest plane is not a table top below the camera")
+        return 1
     return 0
 
 

@@ -16,7 +16,8 @@ done
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 
-packages=(build-essential cmake libeigen3-dev libpng-dev zlib1g-dev googletest file)
+# python3-open3d: the map-export test opens the PLY with it (tools/check_map.py).
+packages=(build-essential cmake libeigen3-dev libpng-dev zlib1g-dev googletest file python3-open3d)
 if $aarch64; then packages+=(g++-aarch64-linux-gnu qemu-user); fi
 
 missing=()

@@ -71,6 +71,7 @@ Status MappingModule::init(const Params& params, const PinholeIntrinsics& k, Clo
     job.gray.allocate(k.width_px, k.height_px);
     job.sensor_inverse_depth.allocate(k.width_px, k.height_px);
   }
+  for (EarlierFrame& e : earlier_) e.gray.allocate(k.width_px, k.height_px);
   builder_.allocate(k, params.tracker);
   fused_.allocate(k, params.sensor.depth_factor, params.sensor.depth_range);
   pixels_.reserve_once(mv_.max_seeds);
@@ -90,9 +91,45 @@ void MappingModule::start(Job* job, const MapperFrame& frame) {
   job->frames_used = 0;
   job->started = ++arrivals_;
   job->spent_ns = 0;
+  scene_depth_m_ = job->median_depth_m;
+  // Newest first: the shortest baselines narrow each seed's interval before the longer ones.
+  for (int i = 1; i <= earlier_count_; ++i) {
+    const EarlierFrame& e = earlier_[(earlier_next_ + kEarlierFrames - i) % kEarlierFrames];
+    if (spacing_m(e.T_w_c, frame.T_w_c) >= params_.map_min_baseline_ratio * job->median_depth_m) {
+      observe(job, e.gray, e.T_w_c);
+    }
+  }
+}
+
+double MappingModule::spacing_m(const SE3& a, const SE3& b) const {
+  return (a.translation() - b.translation()).norm();
+}
+
+void MappingModule::observe(Job* job, const ImageF& gray, const SE3& T_w_c) {
+  job->seeds.observe(gray, T_w_c);
+  ++job->frames_used;
+  ++counters_.frames_observed;
+}
+
+void MappingModule::remember(const MapperFrame& frame) {
+  if (earlier_count_ > 0) {
+    const EarlierFrame& newest = earlier_[(earlier_next_ + kEarlierFrames - 1) % kEarlierFrames];
+    if (spacing_m(newest.T_w_c, frame.T_w_c) < params_.map_min_baseline_ratio * scene_depth_m_) {
+      return;
+    }
+  }
+  EarlierFrame& e = earlier_[earlier_next_];
+  copy_image(frame.gray, &e.gray);
+  e.T_w_c = frame.T_w_c;
+  earlier_next_ = (earlier_next_ + 1) % kEarlierFrames;
+  earlier_count_ = std::min(earlier_count_ + 1, kEarlierFrames);
 }
 
 void MappingModule::step(const MapperFrame& frame) {
+  if (frame.reset_counter != reset_counter_) {
+    reset_counter_ = frame.reset_counter;
+    earlier_count_ = 0;
+  }
   if (frame.new_keyframe != nullptr) {
     // A free slot, or else the oldest open keyframe is finished first.
     Job* slot = nullptr;
@@ -112,16 +149,17 @@ void MappingModule::step(const MapperFrame& frame) {
   for (Job& job : jobs_) {
     if (job.keyframe == nullptr) continue;
     // A frame is used once it has moved far enough, relative to the scene, from the last one.
-    const double baseline = (frame.T_w_c.translation() - job.T_w_last_used.translation()).norm();
-    if (baseline < params_.map_min_baseline_ratio * job.median_depth_m) continue;
+    if (spacing_m(frame.T_w_c, job.T_w_last_used) <
+        params_.map_min_baseline_ratio * job.median_depth_m) {
+      continue;
+    }
     const int64_t t0 = clock_();
-    job.seeds.observe(frame.gray, frame.T_w_c);
+    observe(&job, frame.gray, frame.T_w_c);
     job.T_w_last_used = frame.T_w_c;
-    ++job.frames_used;
-    ++counters_.frames_observed;
     job.spent_ns += clock_() - t0;
     if (job.frames_used >= params_.map_frames_per_keyframe) finalize(&job);
   }
+  remember(frame);
 }
 
 void MappingModule::finish() {
@@ -142,13 +180,17 @@ void MappingModule::finalize(Job* job) {
   const int64_t t0 = clock_();
   const float sigma_sensor = static_cast<float>(params_.sensor.inverse_depth_sigma());
   job->seeds.fuse(sigma_sensor, &pixels_);
-  // The keyframe's map: the sensor's inverse depth, with every edge pixel's fused estimate.
+  // The tracker's map: the sensor's inverse depth, with every edge pixel's fused estimate that
+  // is certain enough for tracking.
+  auto tracked = [this](const FusedPixel& p) {
+    return p.source != DepthSource::kMultiView || mv_.usable_for_tracking(p.rho, p.sigma);
+  };
   copy_image(job->gray, &fused_.gray(0));
   fused_.build_gray();
   ImageF& map = fused_.inverse_depth_level0();
   copy_image(job->sensor_inverse_depth, &map);
   for (const FusedPixel& p : pixels_) {
-    map.at(p.x, p.y) = p.rho;
+    if (tracked(p)) map.at(p.x, p.y) = p.rho;
     switch (p.source) {
       case DepthSource::kSensor:
         ++counters_.points_sensor;
@@ -169,6 +211,7 @@ void MappingModule::finalize(Job* job) {
   kf->map_points.clear();
   const PinholeIntrinsics& k = fused_.intrinsics(0);
   for (const FusedPixel& p : pixels_) {
+    if (!tracked(p)) continue;
     const float z = 1.f / p.rho;
     (void)kf->map_points.push_back(
         {(p.x - static_cast<float>(k.cx_px)) / static_cast<float>(k.fx_px) * z,

@@ -217,6 +217,7 @@ void TrackingPipeline::offer_to_mapper(const PoseEstimate& pose, bool new_keyfra
     return;
   }
   slot->sequence = pose.sequence;
+  slot->reset_counter = pose.reset_counter;
   slot->timestamp_ns = pose.timestamp_ns;
   slot->T_w_c = pose.T_w_c;
   std::memcpy(slot->gray.data(), pyramid_.gray(0).data(), sizeof(float) * slot->gray.size());

@@ -6,9 +6,10 @@
 namespace rgbdtam::testing {
 
 ReplayOutcome replay_and_evaluate(const std::string& sequence, const std::string& config,
-                                  const char* override_assignment) {
+                                  const char* override_assignment, MapSink* map_sink) {
   ReplayOutcome out;
   ReplayOptions opt;
+  opt.map_sink = map_sink;
   opt.sequence = sequence.c_str();
   opt.progress = false;
   char* text = nullptr;

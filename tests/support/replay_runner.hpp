@@ -15,6 +15,7 @@ struct ReplayOutcome {
 };
 
 ReplayOutcome replay_and_evaluate(const std::string& sequence, const std::string& config,
-                                  const char* override_assignment = nullptr);
+                                  const char* override_assignment = nullptr,
+                                  MapSink* map_sink = nullptr);
 
 }  // namespace rgbdtam::testing

@@ -29,7 +29,8 @@ double texture(double u, double v, double phase) {
   return 0.5 + 0.28 * checker + 0.15 * blobs;
 }
 
-std::vector<Plane> scene_planes(bool with_box, bool with_room, double wall_z) {
+std::vector<Plane> scene_planes(bool with_box, bool box_in_corner, bool with_room,
+                                double wall_z) {
   std::vector<Plane> planes;
   auto add = [&](Vector3d n, double d, Vector3d ua, Vector3d va, Vector3d lo, Vector3d hi,
                  double phase) {
@@ -45,8 +46,11 @@ std::vector<Plane> scene_planes(bool with_box, bool with_room, double wall_z) {
     add(-X, -1.5, Z, Y, Vector3d(1.49, -inf, -inf), Vector3d(1.51, inf, inf), 5.0);   // right wall
   }
   if (with_box) {
-    add(-Z, -1.6, X, Y, Vector3d(-0.5, -0.2, 1.59), Vector3d(0.1, 0.4, 1.61), 3.0);  // box front
-    add(X, 0.1, Z, Y, Vector3d(0.09, -0.2, 1.6), Vector3d(0.11, 0.4, 2.2), 4.0);     // box side
+    // Front face (x, y extents) at z = 1.6 m, and the right side face from 1.6 to 2.2 m.
+    const double x0 = box_in_corner ? -1.3 : -0.5, x1 = box_in_corner ? -0.35 : 0.1;
+    const double y0 = box_in_corner ? 0.1 : -0.2, y1 = box_in_corner ? 0.9 : 0.4;
+    add(-Z, -1.6, X, Y, Vector3d(x0, y0, 1.59), Vector3d(x1, y1, 1.61), 3.0);
+    add(X, x1, Z, Y, Vector3d(x1 - 0.01, y0, 1.6), Vector3d(x1 + 0.01, y1, 2.2), 4.0);
   }
   return planes;
 }
@@ -66,7 +70,7 @@ SE3 SyntheticScene::camera_at(double t) const {
 }
 
 SyntheticFrame SyntheticScene::render(const SE3& T_w_c) const {
-  const std::vector<Plane> planes = scene_planes(with_box, with_room, back_wall_z_m);
+  const std::vector<Plane> planes = scene_planes(with_box, box_in_corner, with_room, back_wall_z_m);
   const int w = camera.width_px, h = camera.height_px;
   SyntheticFrame f;
   f.gray.resize(static_cast<size_t>(w) * h);
@@ -116,10 +120,11 @@ SyntheticFrame SyntheticScene::render(const SE3& T_w_c) const {
 
 const std::vector<SyntheticFrame>& SyntheticScene::render_path(int frames, double fps) const {
   // Tests of one binary share the renders of one path.
-  using Key = std::tuple<int, int, double, bool, bool, bool, double, double>;
+  using Key = std::tuple<int, int, double, bool, bool, bool, bool, double, double>;
   static std::map<Key, std::vector<SyntheticFrame>> cache;
-  std::vector<SyntheticFrame>& out = cache[Key(camera.width_px, frames, fps, with_box, with_room,
-                                               diagonal_path, back_wall_z_m, max_depth_m)];
+  std::vector<SyntheticFrame>& out = cache[Key(camera.width_px, frames, fps, with_box, box_in_corner,
+                                               with_room, diagonal_path, back_wall_z_m,
+                                               max_depth_m)];
   while (static_cast<int>(out.size()) < frames) {
     out.push_back(render(camera_at(static_cast<double>(out.size()) / fps)));
   }

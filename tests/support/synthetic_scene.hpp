@@ -52,6 +52,10 @@ struct SyntheticScene {
   bool diagonal_path = false;
   SE3 camera_at(double t_s) const;
   bool with_room = true;  // side walls and floor
+  // The box in the first view's lower-left corner instead of near the centre: as the camera
+  // glides right and up it slides out of the corner, and the wall it covers meanwhile is wall
+  // the first view never saw (in the centre it would hide a strip of the first keyframe's wall).
+  bool box_in_corner = false;
 };
 
 }  // namespace rgbdtam::testing

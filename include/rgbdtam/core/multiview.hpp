@@ -25,11 +25,15 @@ struct MultiViewOptions {
   float max_inverse_depth = 4.f;    // 1/m: nearest depth 0.25 m, when the sensor sees nothing
   float min_inverse_depth = 0.02f;  // 1/m: farthest depth 50 m
   float consistency_sigmas = 2.f;   // an observation agrees within this many sigmas
-  // A multi-view estimate needs sigma_rho / rho below this: a keyframe mapped from a few close
-  // frames would otherwise hand wrong depths to tracking and, through the local maps, to the
-  // next keyframes (on the synthetic far wall: 7 % error on two keyframes at 0.04, all under
-  // 0.9 % at 0.03).
-  float max_relative_sigma = 0.03f;
+  // A multi-view estimate enters the map when sigma_rho / rho is below max_relative_sigma, and
+  // the tracker's points only below tracking_relative_sigma. Tracking errors feed back into
+  // the next keyframes' triangulation: on the synthetic far wall, tracking on estimates up to
+  // 4 % moved keyframes 1-2 enough to bias their whole wall by 5-6 %; at 3 % all stay under 1 %.
+  float max_relative_sigma = 0.05f;
+  float tracking_relative_sigma = 0.03f;
+  bool usable_for_tracking(float rho, float sigma) const {
+    return sigma <= tracking_relative_sigma * rho;
+  }
 };
 
 enum class DepthSource : uint8_t { kNone = 0, kSensor = 1, kMultiView = 2, kFused = 3 };

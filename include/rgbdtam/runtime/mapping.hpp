@@ -25,6 +25,7 @@ namespace rgbdtam {
 // Tracker -> mapper, one per tracked frame. The slot owns its images.
 struct MapperFrame {
   uint32_t sequence = 0;
+  uint32_t reset_counter = 0;  // a change means the poses before it are not comparable
   int64_t timestamp_ns = 0;
   SE3 T_w_c;
   Keyframe* new_keyframe = nullptr;  // set when this frame became a keyframe
@@ -92,7 +93,18 @@ class MappingModule {
     int64_t spent_ns = 0;
   };
   static constexpr int kOpenKeyframes = 3;  // params.cpp sizes the keyframe pool for this
+  // Spaced frames from before the newest keyframe: a new keyframe is first matched against
+  // them (as the authors' code reuses the previous keyframe's frames), so that the pixels the
+  // camera is about to leave behind are seen from the other side too.
+  struct EarlierFrame {
+    ImageF gray;
+    SE3 T_w_c;
+  };
+  static constexpr int kEarlierFrames = 4;
   void start(Job* job, const MapperFrame& frame);
+  void observe(Job* job, const ImageF& gray, const SE3& T_w_c);
+  void remember(const MapperFrame& frame);
+  double spacing_m(const SE3& a, const SE3& b) const;
   void finalize(Job* job);
 
   Params params_;
@@ -101,6 +113,11 @@ class MappingModule {
   MapSink* sink_ = nullptr;
   Job jobs_[kOpenKeyframes];
   uint64_t arrivals_ = 0;
+  EarlierFrame earlier_[kEarlierFrames];
+  int earlier_count_ = 0;  // valid entries; the newest is earlier_[(earlier_next_ + 3) % 4]
+  int earlier_next_ = 0;
+  uint32_t reset_counter_ = 0;
+  float scene_depth_m_ = 1.f;  // the newest keyframe's median depth, to space earlier frames
   KeyframeBuilder builder_;
   FramePyramid fused_;  // the finishing keyframe's grey pyramid and fused inverse depth
   FixedVector<FusedPixel> pixels_;

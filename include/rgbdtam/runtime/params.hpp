@@ -34,7 +34,7 @@ struct Params {
   int lost_frames_before_reset = 10;
   // Multi-view mapping of each new keyframe. Off by default until the mapping issue is done:
   // on fr1_xyz it is neutral (0.88-0.89 cm), and the far-wall hand-over is not yet robust.
-  bool map_enabled = false;
+  bool map_enabled = true;
   bool map_threaded = false;         // the mapper on its own thread (replay: synchronous)
   int map_queue_frames = 4;          // tracker -> mapper queue slots
   int map_frames_per_keyframe = 10;  // frames triangulated per keyframe (code)
