@@ -7,4 +7,4 @@ tools/setup.sh
 cmake --preset host-release >/dev/null
 cmake --build --preset host-release -j"$(nproc)" --target rgbdtam
 build/bin/rgbdtam replay data/tum_fr1_xyz_clip --config config/tum_fr1.conf \
-  --trajectory build/clip_trajectory.txt
+  --trajectory build/clip_trajectory.txt --map build/clip_map.ply

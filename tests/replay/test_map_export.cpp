@@ -16,9 +16,9 @@ TEST(MapExport, ClipMapOpensInOpen3dAndShowsTheDesk) {
   const std::string ply_path = testing::make_temp_dir("map_export") + "/clip_map.ply";
   PlyMapWriter ply;
   ASSERT_TRUE(ply.open(ply_path.c_str()).is_ok());
-  const auto out = testing::replay_and_evaluate(
-      testing::source_path("data/tum_fr1_xyz_clip"),
-      testing::source_path("config/tum_fr1.conf"), "map.enabled=true", &ply);
+  const auto out = testing::replay_and_evaluate(testing::source_path("data/tum_fr1_xyz_clip"),
+                                                testing::source_path("config/tum_fr1.conf"),
+                                                "map.enabled=true", &ply);
   ASSERT_TRUE(out.ran);
   ASSERT_TRUE(ply.close().is_ok());
   EXPECT_GT(ply.points(), 10000u);

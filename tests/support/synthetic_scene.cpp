@@ -29,8 +29,7 @@ double texture(double u, double v, double phase) {
   return 0.5 + 0.28 * checker + 0.15 * blobs;
 }
 
-std::vector<Plane> scene_planes(bool with_box, bool box_in_corner, bool with_room,
-                                double wall_z) {
+std::vector<Plane> scene_planes(bool with_box, bool box_in_corner, bool with_room, double wall_z) {
   std::vector<Plane> planes;
   auto add = [&](Vector3d n, double d, Vector3d ua, Vector3d va, Vector3d lo, Vector3d hi,
                  double phase) {
@@ -122,9 +121,9 @@ const std::vector<SyntheticFrame>& SyntheticScene::render_path(int frames, doubl
   // Tests of one binary share the renders of one path.
   using Key = std::tuple<int, int, double, bool, bool, bool, bool, double, double>;
   static std::map<Key, std::vector<SyntheticFrame>> cache;
-  std::vector<SyntheticFrame>& out = cache[Key(camera.width_px, frames, fps, with_box, box_in_corner,
-                                               with_room, diagonal_path, back_wall_z_m,
-                                               max_depth_m)];
+  std::vector<SyntheticFrame>& out =
+      cache[Key(camera.width_px, frames, fps, with_box, box_in_corner, with_room, diagonal_path,
+                back_wall_z_m, max_depth_m)];
   while (static_cast<int>(out.size()) < frames) {
     out.push_back(render(camera_at(static_cast<double>(out.size()) / fps)));
   }
