@@ -2,14 +2,17 @@
 # Installs the Debian packages rgbdtam needs. With --aarch64 it also installs the cross
 # toolchain and qemu-user, and unpacks the arm64 static libpng and zlib into .sysroot/arm64
 # (download only: the host's package set is not changed to multiarch).
+# With --fuzz it installs clang, whose libFuzzer tools/fuzz.sh uses.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 aarch64=false
+fuzz=false
 for arg in "$@"; do
   case "$arg" in
     --aarch64) aarch64=true ;;
-    *) echo "usage: tools/setup.sh [--aarch64]" >&2; exit 2 ;;
+    --fuzz) fuzz=true ;;
+    *) echo "usage: tools/setup.sh [--aarch64] [--fuzz]" >&2; exit 2 ;;
   esac
 done
 
@@ -19,6 +22,7 @@ if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 # python3-open3d: the map-export test opens the PLY with it (tools/check_map.py).
 packages=(build-essential cmake libeigen3-dev libpng-dev zlib1g-dev googletest file python3-open3d)
 if $aarch64; then packages+=(g++-aarch64-linux-gnu qemu-user); fi
+if $fuzz; then packages+=(clang); fi  # libFuzzer ships with Debian's clang
 
 missing=()
 for p in "${packages[@]}"; do

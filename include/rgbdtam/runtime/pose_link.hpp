@@ -1,0 +1,73 @@
+#pragma once
+// The pose link task: turns each PoseEstimate into a MAVLink ODOMETRY for the robot's
+// controller, sends HEARTBEAT at 1 Hz and STATUSTEXT for events, over any ByteLink.
+//
+// Frames: the local frame is the body frame at the first tracked frame (MAV_FRAME_LOCAL_FRD
+// when the body is front-right-down), the child frame is the body (MAV_FRAME_BODY_FRD); the
+// body-from-camera extrinsics T_b_c come from the board file.
+//
+// Rate policy: the link never queues more than the line carries. A token bucket filled at
+// the transport's line rate (bytes/s; unlimited for UDP) decides whether an ODOMETRY goes
+// out; when it cannot, that pose is skipped and counted, and the next (newer) one is offered.
+// HEARTBEAT and STATUSTEXT always go first. At 115200 baud a 245-byte ODOMETRY at 30 Hz
+// takes 64 % of the line and is never skipped; at 60 Hz, or at 57600 baud, poses are thinned.
+
+#include <cstdint>
+
+#include "rgbdtam/core/se3.hpp"
+#include "rgbdtam/runtime/byte_link.hpp"
+#include "rgbdtam/runtime/mavlink.hpp"
+#include "rgbdtam/runtime/messages.hpp"
+
+namespace rgbdtam {
+
+struct PoseLinkConfig {
+  uint8_t system_id = 1;
+  uint8_t component_id = 197;  // MAV_COMP_ID_VISUAL_INERTIAL_ODOMETRY
+  SE3 T_b_c;                   // body from camera
+  uint8_t frame_id = mavlink::kMavFrameLocalFrd;
+  uint8_t child_frame_id = mavlink::kMavFrameBodyFrd;
+  int64_t heartbeat_period_ns = 1000000000;
+  int64_t burst_ns = 100000000;  // the token bucket holds this much line time
+};
+
+struct PoseLinkCounters {
+  uint64_t odometry_sent = 0;
+  uint64_t odometry_rate_limited = 0;  // skipped by the rate policy
+  uint64_t odometry_refused = 0;       // refused by the transport (its drops/errors)
+  uint64_t heartbeats_sent = 0;
+  uint64_t status_texts_sent = 0;
+};
+
+class PoseLink {
+ public:
+  void init(const PoseLinkConfig& config, ByteLink* link);
+  // One tracked frame (valid or not: a lost frame is reported with quality -1).
+  void on_pose(const PoseEstimate& pose, int64_t now_ns);
+  // An event for the operator (text is cut to 50 characters).
+  void on_status(uint8_t severity, const char* text, int64_t now_ns);
+  // Heartbeat when due, and transport flushing; call at least every frame period.
+  void tick(int64_t now_ns, uint8_t system_status);
+  const PoseLinkCounters& counters() const { return counters_; }
+
+  // The ODOMETRY a pose becomes (exposed for tests).
+  mavlink::Odometry odometry_of(const PoseEstimate& pose);
+
+ private:
+  bool spend(int n, int64_t now_ns, bool must);
+
+  PoseLinkConfig config_;
+  ByteLink* link_ = nullptr;
+  mavlink::Encoder encoder_{1, 197};
+  int64_t last_heartbeat_ns_ = -1;
+  double tokens_ = 0;
+  int64_t tokens_at_ns_ = -1;
+  // The previous valid body pose, for velocities.
+  bool have_previous_ = false;
+  SE3 T_l_b_previous_;
+  int64_t previous_ns_ = 0;
+  uint32_t previous_reset_ = 0;
+  PoseLinkCounters counters_;
+};
+
+}  // namespace rgbdtam

@@ -1,0 +1,252 @@
+#include "rgbdtam/runtime/mavlink.hpp"
+
+#include <cstring>
+
+namespace rgbdtam::mavlink {
+namespace {
+constexpr uint8_t kIncompatSigned = 0x01;
+
+// Little-endian field writer and reader over a payload buffer.
+class Writer {
+ public:
+  explicit Writer(uint8_t* p) : p_(p) {}
+  template <typename T>
+  void put(T v) {
+    std::memcpy(p_ + n_, &v, sizeof(T));  // MAVLink is little-endian, as are our targets
+    n_ += static_cast<int>(sizeof(T));
+  }
+  template <typename T, int N>
+  void put(const T (&v)[N]) {
+    for (const T& x : v) put(x);
+  }
+  int size() const { return n_; }
+
+ private:
+  uint8_t* p_;
+  int n_ = 0;
+};
+
+class Reader {
+ public:
+  explicit Reader(const uint8_t* p) : p_(p) {}
+  template <typename T>
+  void get(T* v) {
+    std::memcpy(v, p_ + n_, sizeof(T));
+    n_ += static_cast<int>(sizeof(T));
+  }
+  template <typename T, int N>
+  void get(T (*v)[N]) {
+    for (T& x : *v) get(&x);
+  }
+
+ private:
+  const uint8_t* p_;
+  int n_ = 0;
+};
+
+// The frame payload zero-padded to the message's full length (MAVLink v2 truncation).
+const uint8_t* padded(const uint8_t* payload, int length, int full, uint8_t* scratch) {
+  if (length >= full) return payload;
+  std::memset(scratch, 0, static_cast<size_t>(full));
+  std::memcpy(scratch, payload, static_cast<size_t>(length));
+  return scratch;
+}
+}  // namespace
+
+uint16_t crc_accumulate(uint8_t byte, uint16_t crc) {
+  uint8_t t = static_cast<uint8_t>(byte ^ (crc & 0xFF));
+  t = static_cast<uint8_t>(t ^ (t << 4));
+  return static_cast<uint16_t>((crc >> 8) ^ (t << 8) ^ (t << 3) ^ (t >> 4));
+}
+
+uint16_t crc_accumulate(const uint8_t* bytes, size_t n, uint16_t crc) {
+  for (size_t i = 0; i < n; ++i) crc = crc_accumulate(bytes[i], crc);
+  return crc;
+}
+
+const MessageSpec* find_spec(uint32_t id) {
+  static constexpr const MessageSpec* kKnown[] = {&kHeartbeat, &kStatusText, &kOdometry};
+  for (const MessageSpec* s : kKnown) {
+    if (s->id == id) return s;
+  }
+  return nullptr;
+}
+
+// Wire order: fields sorted by type size (stable), then the extensions as declared.
+int pack(const Heartbeat& m, uint8_t* payload) {
+  Writer w(payload);
+  w.put(m.custom_mode);
+  w.put(m.type);
+  w.put(m.autopilot);
+  w.put(m.base_mode);
+  w.put(m.system_status);
+  w.put(m.mavlink_version);
+  return w.size();
+}
+
+int pack(const StatusText& m, uint8_t* payload) {
+  Writer w(payload);
+  w.put(m.severity);
+  w.put(m.text);
+  w.put(m.id);
+  w.put(m.chunk_seq);
+  return w.size();
+}
+
+int pack(const Odometry& m, uint8_t* payload) {
+  Writer w(payload);
+  w.put(m.time_usec);
+  w.put(m.x);
+  w.put(m.y);
+  w.put(m.z);
+  w.put(m.q);
+  w.put(m.vx);
+  w.put(m.vy);
+  w.put(m.vz);
+  w.put(m.rollspeed);
+  w.put(m.pitchspeed);
+  w.put(m.yawspeed);
+  w.put(m.pose_covariance);
+  w.put(m.velocity_covariance);
+  w.put(m.frame_id);
+  w.put(m.child_frame_id);
+  w.put(m.reset_counter);
+  w.put(m.estimator_type);
+  w.put(m.quality);
+  return w.size();
+}
+
+void unpack(const uint8_t* payload, int length, Heartbeat* m) {
+  uint8_t scratch[kMaxPayloadBytes];
+  Reader r(padded(payload, length, kHeartbeat.payload_bytes, scratch));
+  r.get(&m->custom_mode);
+  r.get(&m->type);
+  r.get(&m->autopilot);
+  r.get(&m->base_mode);
+  r.get(&m->system_status);
+  r.get(&m->mavlink_version);
+}
+
+void unpack(const uint8_t* payload, int length, StatusText* m) {
+  uint8_t scratch[kMaxPayloadBytes];
+  Reader r(padded(payload, length, kStatusText.payload_bytes, scratch));
+  r.get(&m->severity);
+  r.get(&m->text);
+  r.get(&m->id);
+  r.get(&m->chunk_seq);
+}
+
+void unpack(const uint8_t* payload, int length, Odometry* m) {
+  uint8_t scratch[kMaxPayloadBytes];
+  Reader r(padded(payload, length, kOdometry.payload_bytes, scratch));
+  r.get(&m->time_usec);
+  r.get(&m->x);
+  r.get(&m->y);
+  r.get(&m->z);
+  r.get(&m->q);
+  r.get(&m->vx);
+  r.get(&m->vy);
+  r.get(&m->vz);
+  r.get(&m->rollspeed);
+  r.get(&m->pitchspeed);
+  r.get(&m->yawspeed);
+  r.get(&m->pose_covariance);
+  r.get(&m->velocity_covariance);
+  r.get(&m->frame_id);
+  r.get(&m->child_frame_id);
+  r.get(&m->reset_counter);
+  r.get(&m->estimator_type);
+  r.get(&m->quality);
+}
+
+int Encoder::frame(const MessageSpec& spec, const uint8_t* payload, int length, uint8_t* out) {
+  while (length > 1 && payload[length - 1] == 0) --length;  // v2: trailing zeros are implied
+  out[0] = kMagicV2;
+  out[1] = static_cast<uint8_t>(length);
+  out[2] = 0;  // incompat flags: unsigned
+  out[3] = 0;  // compat flags
+  out[4] = sequence_++;
+  out[5] = system_id_;
+  out[6] = component_id_;
+  out[7] = static_cast<uint8_t>(spec.id & 0xFF);
+  out[8] = static_cast<uint8_t>((spec.id >> 8) & 0xFF);
+  out[9] = static_cast<uint8_t>((spec.id >> 16) & 0xFF);
+  std::memcpy(out + kHeaderBytes, payload, static_cast<size_t>(length));
+  uint16_t crc = crc_accumulate(out + 1, static_cast<size_t>(kHeaderBytes - 1 + length), kCrcInit);
+  crc = crc_accumulate(spec.crc_extra, crc);
+  out[kHeaderBytes + length] = static_cast<uint8_t>(crc & 0xFF);
+  out[kHeaderBytes + length + 1] = static_cast<uint8_t>(crc >> 8);
+  return kHeaderBytes + length + kChecksumBytes;
+}
+
+size_t Decoder::feed(const uint8_t* bytes, size_t n, Frame* frame, bool* got) {
+  *got = false;
+  size_t used = 0;
+  for (;;) {
+    // Drop what cannot start a frame.
+    int start = 0;
+    while (start < have_ && buffer_[start] != kMagicV2) ++start;
+    if (start > 0) {
+      counters_.bytes_skipped += static_cast<uint64_t>(start);
+      std::memmove(buffer_, buffer_ + start, static_cast<size_t>(have_ - start));
+      have_ -= start;
+    }
+    need_ = kHeaderBytes;
+    if (have_ >= 3) {
+      need_ = kHeaderBytes + buffer_[1] + kChecksumBytes +
+              ((buffer_[2] & kIncompatSigned) != 0 ? kSignatureBytes : 0);
+    }
+    if (have_ >= need_) {
+      if (finish(frame)) {
+        std::memmove(buffer_, buffer_ + need_, static_cast<size_t>(have_ - need_));
+        have_ -= need_;
+        *got = true;
+        return used;
+      }
+      // Not a frame after all: resynchronise on the next magic byte after this one.
+      ++counters_.bytes_skipped;
+      std::memmove(buffer_, buffer_ + 1, static_cast<size_t>(have_ - 1));
+      --have_;
+      continue;
+    }
+    if (used == n) return used;
+    buffer_[have_++] = bytes[used++];
+  }
+}
+
+bool Decoder::finish(Frame* frame) {
+  const uint8_t length = buffer_[1];
+  const uint8_t incompat = buffer_[2];
+  const uint32_t id = buffer_[7] | (buffer_[8] << 8) | (static_cast<uint32_t>(buffer_[9]) << 16);
+  const MessageSpec* spec = find_spec(id);
+  if ((incompat & ~kIncompatSigned) != 0 || length == 0) return false;
+  if (spec == nullptr) {
+    ++counters_.unknown_messages;
+    return false;
+  }
+  uint16_t crc =
+      crc_accumulate(buffer_ + 1, static_cast<size_t>(kHeaderBytes - 1 + length), kCrcInit);
+  crc = crc_accumulate(spec->crc_extra, crc);
+  const uint16_t sent = static_cast<uint16_t>(buffer_[kHeaderBytes + length] |
+                                              (buffer_[kHeaderBytes + length + 1] << 8));
+  if (crc != sent || length > spec->payload_bytes) {
+    ++counters_.crc_errors;
+    return false;
+  }
+  frame->length = length;
+  frame->sequence = buffer_[4];
+  frame->system_id = buffer_[5];
+  frame->component_id = buffer_[6];
+  frame->message_id = id;
+  std::memset(frame->payload, 0, sizeof(frame->payload));
+  std::memcpy(frame->payload, buffer_ + kHeaderBytes, length);
+  if (synced_sequence_) {
+    counters_.lost_frames += static_cast<uint8_t>(frame->sequence - next_sequence_);
+  }
+  synced_sequence_ = true;
+  next_sequence_ = static_cast<uint8_t>(frame->sequence + 1);
+  ++counters_.frames;
+  return true;
+}
+
+}  // namespace rgbdtam::mavlink

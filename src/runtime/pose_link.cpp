@@ -1,0 +1,130 @@
+#include "rgbdtam/runtime/pose_link.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+namespace rgbdtam {
+
+void PoseLink::init(const PoseLinkConfig& config, ByteLink* link) {
+  config_ = config;
+  link_ = link;
+  encoder_ = mavlink::Encoder(config.system_id, config.component_id);
+}
+
+mavlink::Odometry PoseLink::odometry_of(const PoseEstimate& pose) {
+  mavlink::Odometry o;
+  o.time_usec = static_cast<uint64_t>(std::max<int64_t>(0, pose.timestamp_ns / 1000));
+  o.frame_id = config_.frame_id;
+  o.child_frame_id = config_.child_frame_id;
+  o.reset_counter = static_cast<uint8_t>(pose.reset_counter);
+  o.estimator_type = mavlink::kMavEstimatorTypeVision;
+  o.velocity_covariance[0] = NAN;  // unknown
+  if ((pose.flags & kPoseValid) == 0) {
+    o.x = o.y = o.z = NAN;
+    for (float& q : o.q) q = NAN;
+    o.vx = o.vy = o.vz = o.rollspeed = o.pitchspeed = o.yawspeed = NAN;
+    o.pose_covariance[0] = NAN;
+    o.quality = -1;
+    have_previous_ = false;
+    return o;
+  }
+  // The local frame is the body at the first frame: T_l_b = T_b_c T_w_c T_c_b.
+  const SE3 T_l_b = config_.T_b_c * pose.T_w_c * config_.T_b_c.inverse();
+  o.x = static_cast<float>(T_l_b.translation().x());
+  o.y = static_cast<float>(T_l_b.translation().y());
+  o.z = static_cast<float>(T_l_b.translation().z());
+  const Eigen::Quaterniond& q = T_l_b.quaternion();
+  o.q[0] = static_cast<float>(q.w());
+  o.q[1] = static_cast<float>(q.x());
+  o.q[2] = static_cast<float>(q.y());
+  o.q[3] = static_cast<float>(q.z());
+  const double dt_s = (pose.timestamp_ns - previous_ns_) * 1e-9;
+  if (have_previous_ && pose.reset_counter == previous_reset_ && dt_s > 0) {
+    const SE3 T_prev_now = T_l_b_previous_.inverse() * T_l_b;  // body motion, in the body
+    const Vector3d v =
+        T_l_b.rotation().transpose() * (T_l_b.translation() - T_l_b_previous_.translation()) / dt_s;
+    const Vector3d w = so3_log(T_prev_now.quaternion()) / dt_s;
+    o.vx = static_cast<float>(v.x());
+    o.vy = static_cast<float>(v.y());
+    o.vz = static_cast<float>(v.z());
+    o.rollspeed = static_cast<float>(w.x());
+    o.pitchspeed = static_cast<float>(w.y());
+    o.yawspeed = static_cast<float>(w.z());
+  } else {
+    o.vx = o.vy = o.vz = o.rollspeed = o.pitchspeed = o.yawspeed = NAN;
+  }
+  have_previous_ = true;
+  T_l_b_previous_ = T_l_b;
+  previous_ns_ = pose.timestamp_ns;
+  previous_reset_ = pose.reset_counter;
+  // The Gauss-Newton information is over a camera-frame twist (v, omega); rotate both blocks
+  // into the local frame. Rotation variances are small-angle, about the local axes.
+  Eigen::FullPivLU<Eigen::Matrix<double, 6, 6>> lu(pose.information);
+  if (lu.isInvertible()) {
+    const Matrix3d R_l_c = (config_.T_b_c * pose.T_w_c).rotation();
+    Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Zero();
+    A.topLeftCorner<3, 3>() = R_l_c;
+    A.bottomRightCorner<3, 3>() = R_l_c;
+    const Eigen::Matrix<double, 6, 6> cov = A * lu.inverse() * A.transpose();
+    int k = 0;
+    for (int r = 0; r < 6; ++r) {
+      for (int c = r; c < 6; ++c) o.pose_covariance[k++] = static_cast<float>(cov(r, c));
+    }
+  } else {
+    o.pose_covariance[0] = NAN;
+  }
+  o.quality = static_cast<int8_t>(std::clamp<long>(std::lround(100.0 * pose.overlap), 1, 100));
+  return o;
+}
+
+bool PoseLink::spend(int n, int64_t now_ns, bool must) {
+  const double rate = link_->line_rate_bytes_per_s();
+  if (rate <= 0) return true;
+  const double cap = std::max(rate * config_.burst_ns * 1e-9, 2.0 * mavlink::kMaxFrameBytes);
+  if (tokens_at_ns_ < 0) tokens_ = cap;
+  if (tokens_at_ns_ >= 0 && now_ns > tokens_at_ns_)
+    tokens_ += rate * (now_ns - tokens_at_ns_) * 1e-9;
+  tokens_ = std::min(tokens_, cap);
+  tokens_at_ns_ = now_ns;
+  if (tokens_ < n && !must) return false;
+  tokens_ -= n;
+  return true;
+}
+
+void PoseLink::on_pose(const PoseEstimate& pose, int64_t now_ns) {
+  uint8_t frame[mavlink::kMaxFrameBytes];
+  const int n = encoder_.encode(odometry_of(pose), frame);
+  if (!spend(n, now_ns, false)) {
+    ++counters_.odometry_rate_limited;
+  } else if (link_->send(frame, static_cast<size_t>(n))) {
+    ++counters_.odometry_sent;
+  } else {
+    ++counters_.odometry_refused;
+  }
+}
+
+void PoseLink::on_status(uint8_t severity, const char* text, int64_t now_ns) {
+  mavlink::StatusText s;
+  s.severity = severity;
+  std::memcpy(s.text, text, strnlen(text, sizeof(s.text)));  // NUL only when shorter
+  uint8_t frame[mavlink::kMaxFrameBytes];
+  const int n = encoder_.encode(s, frame);
+  (void)spend(n, now_ns, true);
+  if (link_->send(frame, static_cast<size_t>(n))) ++counters_.status_texts_sent;
+}
+
+void PoseLink::tick(int64_t now_ns, uint8_t system_status) {
+  if (last_heartbeat_ns_ < 0 || now_ns - last_heartbeat_ns_ >= config_.heartbeat_period_ns) {
+    last_heartbeat_ns_ = now_ns;
+    mavlink::Heartbeat hb;
+    hb.system_status = system_status;
+    uint8_t frame[mavlink::kMaxFrameBytes];
+    const int n = encoder_.encode(hb, frame);
+    (void)spend(n, now_ns, true);
+    if (link_->send(frame, static_cast<size_t>(n))) ++counters_.heartbeats_sent;
+  }
+  link_->flush();
+}
+
+}  // namespace rgbdtam

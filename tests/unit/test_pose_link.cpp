@@ -1,0 +1,249 @@
+// The pose link: ODOMETRY contents (frames, velocities, covariance, quality, reset counter),
+// and the whole path over UDP on loopback and over a pseudo-terminal pair at 921600 and
+// 115200 baud, with the rate policy and a transport that never blocks.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <pty.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include "rgbdtam/hal/serial_link.hpp"
+#include "rgbdtam/hal/udp_link.hpp"
+#include "rgbdtam/runtime/pose_link.hpp"
+
+namespace rgbdtam {
+namespace {
+
+constexpr int64_t kFrameNs = 33333333;  // 30 Hz
+
+// Camera (x right, y down, z forward) to body front-right-down.
+SE3 body_from_camera() {
+  Matrix3d R;
+  R << 0, 0, 1, 1, 0, 0, 0, 1, 0;
+  return SE3(Eigen::Quaterniond(R), Vector3d(0.1, 0, -0.05));
+}
+
+PoseEstimate pose_at(int i, const Vector3d& camera_velocity_m_s) {
+  PoseEstimate p;
+  p.sequence = static_cast<uint32_t>(i);
+  p.timestamp_ns = 1000000000 + i * kFrameNs;
+  p.T_w_c = SE3(Eigen::Quaterniond::Identity(), camera_velocity_m_s * (i * kFrameNs * 1e-9));
+  p.flags = kPoseValid;
+  p.overlap = 0.9f;
+  p.information = Eigen::Matrix<double, 6, 6>::Identity() * 1e6;
+  return p;
+}
+
+TEST(PoseLink, OdometryIsInTheBodyFrameWithVelocitiesCovarianceAndHealth) {
+  PoseLinkConfig config;
+  config.T_b_c = body_from_camera();
+  PoseLink link;
+  link.init(config, nullptr);
+  const Vector3d forward_in_camera(0, 0, 0.6);  // 0.6 m/s along the optical axis
+  (void)link.odometry_of(pose_at(0, forward_in_camera));
+  PoseEstimate p = pose_at(1, forward_in_camera);
+  p.information(0, 0) = 4e6;  // camera x (body y) is known better
+  const mavlink::Odometry o = link.odometry_of(p);
+  EXPECT_NEAR(o.x, 0.02, 1e-6);  // body x forward: 0.6 m/s * 1/30 s
+  EXPECT_NEAR(o.y, 0.0, 1e-6);
+  EXPECT_NEAR(o.vx, 0.6, 1e-4);
+  EXPECT_NEAR(o.vy, 0.0, 1e-5);
+  EXPECT_NEAR(o.q[0], 1.0, 1e-6);
+  EXPECT_NEAR(o.yawspeed, 0.0, 1e-6);
+  EXPECT_NEAR(o.pose_covariance[0], 1e-6, 1e-12);     // x x
+  EXPECT_NEAR(o.pose_covariance[6], 0.25e-6, 1e-12);  // y y
+  EXPECT_EQ(o.quality, 90);
+  EXPECT_EQ(o.estimator_type, mavlink::kMavEstimatorTypeVision);
+  EXPECT_EQ(o.frame_id, mavlink::kMavFrameLocalFrd);
+  EXPECT_TRUE(std::isnan(o.velocity_covariance[0]));
+
+  // A lost frame: quality -1, no pose. The next valid one has no velocity (no history).
+  PoseEstimate lost = pose_at(2, forward_in_camera);
+  lost.flags = kLost;
+  const mavlink::Odometry l = link.odometry_of(lost);
+  EXPECT_EQ(l.quality, -1);
+  EXPECT_TRUE(std::isnan(l.x));
+  PoseEstimate after = pose_at(3, forward_in_camera);
+  after.reset_counter = 1;
+  const mavlink::Odometry a = link.odometry_of(after);
+  EXPECT_EQ(a.reset_counter, 1);
+  EXPECT_TRUE(std::isnan(a.vx));
+  EXPECT_NEAR(a.x, 0.06, 1e-6);
+}
+
+// Collects every frame a decoder finds in a byte source.
+struct Received {
+  mavlink::Decoder decoder;
+  std::vector<mavlink::Odometry> odometry;
+  int heartbeats = 0, status_texts = 0;
+  void take(const uint8_t* bytes, size_t n) {
+    mavlink::Frame f;
+    size_t used = 0;
+    for (;;) {
+      bool got = false;
+      used += decoder.feed(bytes + used, n - used, &f, &got);
+      if (!got) return;
+      if (f.message_id == mavlink::kOdometry.id) {
+        odometry.emplace_back();
+        mavlink::unpack(f.payload, f.length, &odometry.back());
+      } else if (f.message_id == mavlink::kHeartbeat.id) {
+        ++heartbeats;
+      } else if (f.message_id == mavlink::kStatusText.id) {
+        ++status_texts;
+      }
+    }
+  }
+};
+
+TEST(PoseLink, EveryOdometryArrivesOverUdpOnLoopback) {
+  UdpLink receiver, sender;
+  ASSERT_TRUE(receiver.open(nullptr, 0, 0).is_ok());
+  ASSERT_TRUE(sender.open("127.0.0.1", receiver.local_port(), 0).is_ok());
+  PoseLink link;
+  link.init(PoseLinkConfig{}, &sender);
+  Received rx;
+  uint8_t buf[2048];
+  constexpr int kPoses = 300;
+  for (int i = 0; i < kPoses; ++i) {
+    const int64_t now = i * kFrameNs;
+    link.tick(now, mavlink::kMavStateActive);
+    link.on_pose(pose_at(i, Vector3d(0.1, 0, 0)), now);
+    if (i == 100) link.on_status(mavlink::kMavSeverityWarning, "tracking lost", now);
+    for (size_t n; (n = receiver.receive(buf, sizeof(buf))) > 0;) rx.take(buf, n);
+  }
+  for (int spin = 0; spin < 100; ++spin) {
+    for (size_t n; (n = receiver.receive(buf, sizeof(buf))) > 0;) rx.take(buf, n);
+  }
+  ASSERT_EQ(rx.odometry.size(), static_cast<size_t>(kPoses));
+  EXPECT_EQ(rx.decoder.counters().crc_errors, 0u);
+  EXPECT_EQ(rx.heartbeats, 10);  // 1 Hz over 10 s
+  EXPECT_EQ(rx.status_texts, 1);
+  EXPECT_EQ(rx.odometry[150].time_usec,
+            static_cast<uint64_t>((1000000000 + 150 * kFrameNs) / 1000));
+  EXPECT_EQ(link.counters().odometry_sent, static_cast<uint64_t>(kPoses));
+  EXPECT_EQ(sender.counters().drops + sender.counters().errors, 0u);
+}
+
+// A pseudo-terminal pair: the link writes the slave as it would a UART; the test reads the
+// master. The pty does not pace bytes by baud: the link's own rate policy does.
+class PtyPair {
+ public:
+  PtyPair() {
+    char name[128];
+    ok_ = ::openpty(&master_, &slave_, name, nullptr, nullptr) == 0;
+    if (ok_) {
+      slave_name_ = name;
+      ::fcntl(master_, F_SETFL, ::fcntl(master_, F_GETFL) | O_NONBLOCK);
+    }
+  }
+  ~PtyPair() {
+    if (ok_) {
+      ::close(master_);
+      ::close(slave_);
+    }
+  }
+  bool ok() const { return ok_; }
+  const char* slave_name() const { return slave_name_.c_str(); }
+  size_t read(uint8_t* buf, size_t n) {
+    const ssize_t got = ::read(master_, buf, n);
+    return got > 0 ? static_cast<size_t>(got) : 0;
+  }
+
+ private:
+  bool ok_ = false;
+  int master_ = -1, slave_ = -1;
+  std::string slave_name_;
+};
+
+struct SerialRun {
+  PoseLinkCounters link;
+  LinkCounters transport;
+  size_t received = 0;
+  uint64_t crc_errors = 0;
+};
+
+SerialRun stream_over_pty(uint32_t baud, int64_t period_ns, int poses) {
+  SerialRun out;
+  PtyPair pty;
+  EXPECT_TRUE(pty.ok());
+  SerialLink serial;
+  EXPECT_TRUE(serial.open(pty.slave_name(), baud).is_ok());
+  PoseLink link;
+  link.init(PoseLinkConfig{}, &serial);
+  Received rx;
+  uint8_t buf[4096];
+  for (int i = 0; i < poses; ++i) {
+    const int64_t now = i * period_ns;
+    link.tick(now, mavlink::kMavStateActive);
+    link.on_pose(pose_at(i, Vector3d(0.1, 0, 0)), now);
+    for (size_t n; (n = pty.read(buf, sizeof(buf))) > 0;) rx.take(buf, n);
+  }
+  for (int spin = 0; spin < 100 && serial.flush() > 0; ++spin) {
+    for (size_t n; (n = pty.read(buf, sizeof(buf))) > 0;) rx.take(buf, n);
+  }
+  for (size_t n; (n = pty.read(buf, sizeof(buf))) > 0;) rx.take(buf, n);
+  out.link = link.counters();
+  out.transport = serial.counters();
+  out.received = rx.odometry.size();
+  out.crc_errors = rx.decoder.counters().crc_errors;
+  return out;
+}
+
+TEST(PoseLink, SerialAt921600CarriesEveryPoseAt30Hz) {
+  const SerialRun r = stream_over_pty(921600, kFrameNs, 150);
+  EXPECT_EQ(r.received, 150u);
+  EXPECT_EQ(r.link.odometry_rate_limited, 0u);
+  EXPECT_EQ(r.crc_errors, 0u);
+}
+
+TEST(PoseLink, SerialAt115200CarriesThirtyHertzAndThinsSixtyHertzToTheLineRate) {
+  // 245-byte frames: 30 Hz needs 7350 B/s of the 11520 the line carries.
+  const SerialRun at30 = stream_over_pty(115200, kFrameNs, 150);
+  EXPECT_EQ(at30.received, 150u);
+  EXPECT_EQ(at30.link.odometry_rate_limited, 0u);
+  // 60 Hz needs 14700 B/s: poses are skipped, never queued, and what goes out fits the line.
+  constexpr int kPoses = 600;  // 10 s
+  const SerialRun at60 = stream_over_pty(115200, kFrameNs / 2, kPoses);
+  const double line_bytes = 11520.0 * 10.0 + 11520.0 * 0.1;  // 10 s plus the burst
+  EXPECT_GT(at60.link.odometry_rate_limited, 0u);
+  EXPECT_LE(static_cast<double>(at60.transport.tx_bytes), line_bytes + 2 * 245);
+  EXPECT_GE(static_cast<double>(at60.received), 0.95 * 11520.0 * 10.0 / 245.0 - 20);
+  EXPECT_EQ(at60.received, at60.link.odometry_sent);
+  EXPECT_EQ(at60.crc_errors, 0u);
+  std::printf("115200 baud, 60 Hz for 10 s: %zu of %d poses sent, %llu skipped, %llu bytes\n",
+              at60.received, kPoses,
+              static_cast<unsigned long long>(at60.link.odometry_rate_limited),
+              static_cast<unsigned long long>(at60.transport.tx_bytes));
+}
+
+TEST(PoseLink, AFullSerialPortRefusesFramesInsteadOfBlocking) {
+  PtyPair pty;  // nobody reads the master: the pty and then the ring fill up
+  ASSERT_TRUE(pty.ok());
+  SerialLink serial;
+  ASSERT_TRUE(serial.open(pty.slave_name(), 921600).is_ok());
+  const uint8_t frame[245] = {0xFD};
+  int refused = 0;
+  for (int i = 0; i < 2000; ++i) refused += serial.send(frame, sizeof(frame)) ? 0 : 1;
+  EXPECT_GT(refused, 0);  // returned: had send blocked, this test would never get here
+  EXPECT_EQ(serial.counters().drops, static_cast<uint64_t>(refused));
+  EXPECT_EQ(serial.counters().errors, 0u);
+}
+
+TEST(PoseLink, BadTransportSettingsAreErrorsNotCrashes) {
+  SerialLink serial;
+  const Status baud = serial.open("/dev/null", 123456);
+  EXPECT_FALSE(baud.is_ok());
+  EXPECT_NE(std::string(baud.message()).find("123456"), std::string::npos);
+  SerialLink missing;
+  EXPECT_FALSE(missing.open("/nonexistent/tty", 115200).is_ok());
+  SerialLink not_a_tty;
+  EXPECT_FALSE(not_a_tty.open("/dev/null", 115200).is_ok());
+  UdpLink udp;
+  EXPECT_FALSE(udp.open("localhost", 14550, 0).is_ok());  // numeric addresses only
+}
+
+}  // namespace
+}  // namespace rgbdtam
