@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Installs the Debian packages rgbdtam needs. With --aarch64 it also installs the cross
-# toolchain and qemu-user, and unpacks the arm64 static libpng and zlib into .sysroot/arm64
+# toolchain and qemu-user, and unpacks the arm64 static libpng, zlib and libgpiod into .sysroot/arm64
 # (download only: the host's package set is not changed to multiarch).
 # With --fuzz it installs clang, whose libFuzzer tools/fuzz.sh uses.
 set -euo pipefail
@@ -20,7 +20,8 @@ SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 
 # python3-open3d: the map-export test opens the PLY with it (tools/check_map.py).
-packages=(build-essential cmake libeigen3-dev libpng-dev zlib1g-dev googletest file python3-open3d)
+packages=(build-essential cmake libeigen3-dev libpng-dev zlib1g-dev libgpiod-dev googletest file
+  python3-open3d)
 if $aarch64; then packages+=(g++-aarch64-linux-gnu qemu-user); fi
 if $fuzz; then packages+=(clang); fi  # libFuzzer ships with Debian's clang
 
@@ -34,14 +35,15 @@ if [ ${#missing[@]} -gt 0 ]; then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${missing[@]}" >/dev/null
 fi
 
-if $aarch64 && [ ! -f .sysroot/arm64/usr/lib/aarch64-linux-gnu/libpng16.a ]; then
-  echo "setup: fetching arm64 libpng and zlib into .sysroot/arm64"
+if $aarch64 && [ ! -f .sysroot/arm64/usr/lib/aarch64-linux-gnu/libgpiod.a ]; then
+  echo "setup: fetching arm64 libpng, zlib and libgpiod into .sysroot/arm64"
   if ! dpkg --print-foreign-architectures | grep -qx arm64; then
     $SUDO dpkg --add-architecture arm64
   fi
   $SUDO apt-get update -qq
   work=$(mktemp -d)
-  (cd "$work" && apt-get download -qq libpng-dev:arm64 libpng16-16:arm64 zlib1g-dev:arm64 zlib1g:arm64 2>/dev/null)
+  (cd "$work" && apt-get download -qq libpng-dev:arm64 libpng16-16:arm64 zlib1g-dev:arm64 zlib1g:arm64 \
+    libgpiod-dev:arm64 libgpiod2:arm64 2>/dev/null)
   mkdir -p .sysroot/arm64
   for deb in "$work"/*.deb; do dpkg-deb -x "$deb" .sysroot/arm64; done
   rm -rf "$work"

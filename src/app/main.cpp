@@ -1,6 +1,8 @@
 // rgbdtam command line: replay a recorded sequence, evaluate a trajectory, show parameters.
 
+#include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <memory>
 #include <string>
@@ -9,6 +11,7 @@
 #include "replay_job.hpp"
 #include "rgbdtam/hal/file.hpp"
 #include "rgbdtam/hal/ply_map_writer.hpp"
+#include "run_job.hpp"
 
 namespace rgbdtam {
 namespace {
@@ -22,7 +25,9 @@ void usage() {
                "                 [--map map.ply] [--set key=value]... [--max-frames N] [--quiet]\n"
                "                 [--json]\n"
                "  rgbdtam eval <groundtruth.txt> <estimate.txt> [--json] [--frames rgb.txt]\n"
-               "  rgbdtam params --config <file> [--set key=value]...\n");
+               "  rgbdtam params --config <file> [--set key=value]...\n"
+               "  rgbdtam run --board <board-folder> [--board-set key=value]...\n"
+               "              [--set key=value]... [--max-frames N] [--quiet]\n");
 }
 
 // Shared by replay and params: --config and --set build the parameters.
@@ -173,6 +178,51 @@ int replay_command(int argc, char** argv) {
   return s.is_ok() ? 0 : 1;
 }
 
+RunJob* g_running = nullptr;
+void on_signal(int) {
+  if (g_running != nullptr) g_running->request_stop();  // an atomic store: signal-safe
+}
+
+int run_command(int argc, char** argv) {
+  RunOptions options;
+  for (int i = 0; i < argc; ++i) {
+    const bool has_value = i + 1 < argc;
+    if (std::strcmp(argv[i], "--board") == 0 && has_value) {
+      options.board_dir = argv[++i];
+    } else if (std::strcmp(argv[i], "--board-set") == 0 && has_value &&
+               options.board_override_count < RunOptions::kMaxOverrides) {
+      options.board_overrides[options.board_override_count++] = argv[++i];
+    } else if (std::strcmp(argv[i], "--set") == 0 && has_value &&
+               options.param_override_count < RunOptions::kMaxOverrides) {
+      options.param_overrides[options.param_override_count++] = argv[++i];
+    } else if (std::strcmp(argv[i], "--max-frames") == 0 && has_value) {
+      options.max_frames = std::atoi(argv[++i]);
+    } else if (std::strcmp(argv[i], "--quiet") == 0) {
+      options.progress = false;
+    } else {
+      std::fprintf(stderr, "rgbdtam run: unknown argument '%s'\n", argv[i]);
+      usage();
+      return 2;
+    }
+  }
+  auto job = std::make_unique<RunJob>();
+  Status s = job->init(options);
+  if (s.is_ok()) s = job->start();
+  if (!s.is_ok()) {
+    std::fprintf(stderr, "rgbdtam run: %s\n", s.message());
+    return 1;
+  }
+  g_running = job.get();
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  while (job->step()) {
+  }
+  job->finish();
+  g_running = nullptr;
+  job->print_summary();
+  return 0;
+}
+
 }  // namespace
 }  // namespace rgbdtam
 
@@ -185,6 +235,7 @@ int main(int argc, char** argv) {
   if (std::strcmp(verb, "replay") == 0) return rgbdtam::replay_command(argc - 2, argv + 2);
   if (std::strcmp(verb, "eval") == 0) return rgbdtam::evaluate_command(argc - 2, argv + 2);
   if (std::strcmp(verb, "params") == 0) return rgbdtam::params_command(argc - 2, argv + 2);
+  if (std::strcmp(verb, "run") == 0) return rgbdtam::run_command(argc - 2, argv + 2);
   if (std::strcmp(verb, "--help") == 0 || std::strcmp(verb, "help") == 0) {
     rgbdtam::usage();
     return 0;

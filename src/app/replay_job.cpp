@@ -26,6 +26,7 @@ Status ReplayJob::init(const ReplayOptions& options) {
                  source_.depth_list().bad_lines, source_.depth_list().first_problem.message());
   }
   RGBDTAM_RETURN_IF_ERROR(system_.init(p, monotonic_ns, options.map_sink));
+  RGBDTAM_RETURN_IF_ERROR(system_.start());
   if (options.trajectory_path != nullptr) {
     RGBDTAM_RETURN_IF_ERROR(writer_.open(options.trajectory_path));
   }

@@ -28,35 +28,12 @@ float median_depth_m(const ImageF& inverse_depth, float* nearest_m) {
 }  // namespace
 
 void MapperQueue::allocate(int slots, int width, int height) {
-  capacity_ = slots;
-  slots_.reset(new MapperFrame[static_cast<size_t>(slots)]);
+  SpscRing<MapperFrame>::allocate(slots);
   for (int i = 0; i < slots; ++i) {
-    slots_[i].gray.allocate(width, height);
-    slots_[i].inverse_depth.allocate(width, height);
-    slots_[i].edges.allocate(width, height);
+    slot(i).gray.allocate(width, height);
+    slot(i).inverse_depth.allocate(width, height);
+    slot(i).edges.allocate(width, height);
   }
-}
-
-MapperFrame* MapperQueue::begin_push() {
-  const uint32_t tail = tail_.load(std::memory_order_relaxed);
-  if (tail - head_.load(std::memory_order_acquire) >= static_cast<uint32_t>(capacity_)) {
-    return nullptr;
-  }
-  return &slots_[tail % static_cast<uint32_t>(capacity_)];
-}
-
-void MapperQueue::publish() {
-  tail_.store(tail_.load(std::memory_order_relaxed) + 1, std::memory_order_release);
-}
-
-MapperFrame* MapperQueue::front() {
-  const uint32_t head = head_.load(std::memory_order_relaxed);
-  if (head == tail_.load(std::memory_order_acquire)) return nullptr;
-  return &slots_[head % static_cast<uint32_t>(capacity_)];
-}
-
-void MapperQueue::pop() {
-  head_.store(head_.load(std::memory_order_relaxed) + 1, std::memory_order_release);
 }
 
 Status MappingModule::init(const Params& params, const PinholeIntrinsics& k, ClockFn clock,
@@ -231,11 +208,13 @@ MappingThread::~MappingThread() {
   if (thread_.joinable()) stop();
 }
 
-void MappingThread::start(MapperQueue* queue, MappingModule* mapper) {
+Status MappingThread::start(MapperQueue* queue, MappingModule* mapper,
+                            const ThreadPlacement& placement) {
   queue_ = queue;
   mapper_ = mapper;
   stopping_ = false;
   thread_ = std::thread([this] { run(); });
+  return place_thread(thread_, placement, "rgbdtam-mapper");
 }
 
 void MappingThread::notify() { wake_.notify_one(); }

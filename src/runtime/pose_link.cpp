@@ -6,6 +6,11 @@
 
 namespace rgbdtam {
 
+SE3 camera_pose_of(const mavlink::Odometry& o, const SE3& T_b_c) {
+  const SE3 T_l_b(Eigen::Quaterniond(o.q[0], o.q[1], o.q[2], o.q[3]), Vector3d(o.x, o.y, o.z));
+  return T_b_c.inverse() * T_l_b * T_b_c;
+}
+
 void PoseLink::init(const PoseLinkConfig& config, ByteLink* link) {
   config_ = config;
   link_ = link;

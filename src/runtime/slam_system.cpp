@@ -9,9 +9,13 @@ Status SlamSystem::init(const Params& params, ClockFn clock, MapSink* sink) {
     queue_.allocate(params.map_queue_frames, params.camera.width_px, params.camera.height_px);
     RGBDTAM_RETURN_IF_ERROR(mapper_.init(params, params.camera, clock, sink));
     tracking_.connect_mapper(&queue_);
-    if (params.map_threaded) thread_.start(&queue_, &mapper_);
   }
   return Status::ok();
+}
+
+Status SlamSystem::start(const ThreadPlacement& mapper) {
+  if (!params_.map_enabled || !params_.map_threaded) return Status::ok();
+  return thread_.start(&queue_, &mapper_, mapper);
 }
 
 PoseEstimate SlamSystem::process(const SensorFrame& frame) {

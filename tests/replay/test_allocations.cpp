@@ -11,6 +11,8 @@
 
 #include "replay_job.hpp"
 #include "rgbdtam/hal/file.hpp"
+#include "rgbdtam/hal/udp_link.hpp"
+#include "run_job.hpp"
 #include "test_paths.hpp"
 
 namespace {
@@ -139,6 +141,40 @@ TEST(Allocations, NoneWithTheMapperSynchronousOrOnItsOwnThread) {
     std::printf("%s: %u keyframes mapped, %ld allocations after init\n", mode,
                 job.mapper().counters().keyframes_mapped, calls);
   }
+}
+
+TEST(Allocations, NoneInTheFirmwareRuntimeAcrossItsThreads) {
+  // rgbdtam run on the host-emulation board: paced replay, tracker, mapper thread, link thread
+  // sending MAVLink over UDP to this test, fake GPIO.
+  UdpLink receiver;
+  ASSERT_TRUE(receiver.open(nullptr, 0, 0).is_ok());
+  const std::string board = testing::source_path("board/host-emulation");
+  const std::string endpoint = "link.udp_remote=127.0.0.1:" + std::to_string(receiver.local_port());
+  RunOptions options;
+  options.board_dir = board.c_str();
+  options.board_overrides[options.board_override_count++] = endpoint.c_str();
+  options.progress = false;
+  RunJob job;
+  ASSERT_TRUE(job.init(options).is_ok());
+  ASSERT_TRUE(job.start().is_ok());  // threads exist: init is complete
+  g_calls = 0;
+  g_bytes = 0;
+  g_armed = true;
+  while (job.step()) {
+  }
+  job.finish();
+  g_armed = false;
+  const FirmwareCounters& c = job.runtime().counters();
+  EXPECT_EQ(c.frames + job.sensor_dropped(), 50u);
+  EXPECT_GT(job.runtime().slam().mapper().counters().keyframes_mapped, 0u);
+  EXPECT_EQ(job.runtime().link().counters().odometry_sent, c.frames);
+  EXPECT_EQ(g_calls.load(), 0) << g_bytes.load() << " bytes allocated after init";
+  std::printf(
+      "firmware runtime: %u frames, %u keyframes mapped, %llu ODOMETRY sent, %ld "
+      "allocations after init\n",
+      c.frames, job.runtime().slam().mapper().counters().keyframes_mapped,
+      static_cast<unsigned long long>(job.runtime().link().counters().odometry_sent),
+      g_calls.load());
 }
 
 }  // namespace

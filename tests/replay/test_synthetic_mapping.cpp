@@ -95,6 +95,7 @@ TEST(SyntheticMapping, FarWallBeyondSensorRangeIsMappedAndTrackingContinuesOnIt)
   ASSERT_TRUE(slam.init(
                       p, [] { return int64_t{0}; }, &scorer)
                   .is_ok());
+  ASSERT_TRUE(slam.start().is_ok());
   const auto& frames = scene.render_path(kFrames, kFps);
   const SE3 T_w0 = scene.camera_at(0.0);
   double worst_m = 0.0, worst_without_box_m = 0.0;

@@ -69,7 +69,8 @@ TEST(Params, BadValuesNameTheFileAndTheKey) {
   expect_error(std::string(kMinimal) + "camera.fx = five hundred\n", "is not a number");
   expect_error(std::string(kMinimal) + "map.keyframe_pool = 3.5\n", "not a whole number");
   expect_error(std::string(kMinimal) + "tracker.motion_model = maybe\n", "true/false");
-  expect_error(std::string(kMinimal) + "tracker.residuals = PX+GIDD\n", "residual configuration");
+  expect_error(std::string(kMinimal) + "tracker.residuals = PX+GIDD\n",
+               "'PX+GIDD' is not valid (PS, PD");
   expect_error(std::string(kMinimal) + "just some words\n", "expected 'key = value'");
   expect_error("camera.width = 640\n", "missing required key");
   expect_error(std::string(kMinimal) + "camera.width = 636\n", "divisible by 8");

@@ -40,6 +40,9 @@ class TumReplaySource : public SensorSource {
   Status next(SensorFrame* frame, Status* warning) override;
 
   int frame_count() const { return rgb_.size; }
+  // The index of the frame next() delivers, and a jump forward to a later one.
+  int position() const { return cursor_; }
+  void skip_to(int index) { cursor_ = index > cursor_ ? index : cursor_; }
   const TumList& rgb_list() const { return rgb_; }
   const TumList& depth_list() const { return depth_; }
   const ReplayCounters& counters() const { return counters_; }

@@ -19,6 +19,8 @@
 #include "rgbdtam/core/tracker.hpp"
 #include "rgbdtam/runtime/latency_stats.hpp"
 #include "rgbdtam/runtime/params.hpp"
+#include "rgbdtam/runtime/spsc_ring.hpp"
+#include "rgbdtam/runtime/thread_placement.hpp"
 
 namespace rgbdtam {
 
@@ -34,21 +36,10 @@ struct MapperFrame {
   ImageU8 edges;                     // level 0 Canny edges; filled for keyframes only
 };
 
-class MapperQueue {
+// Tracker -> mapper frames; MapperQueue::allocate sizes each slot's images.
+class MapperQueue : public SpscRing<MapperFrame> {
  public:
   void allocate(int slots, int width, int height);
-  // Producer: a free slot, or null when the queue is full.
-  MapperFrame* begin_push();
-  void publish();
-  // Consumer: the oldest published slot, or null.
-  MapperFrame* front();
-  void pop();
-
- private:
-  std::unique_ptr<MapperFrame[]> slots_;
-  int capacity_ = 0;
-  std::atomic<uint32_t> head_{0};  // next to pop
-  std::atomic<uint32_t> tail_{0};  // next to publish
 };
 
 // Receives each finished keyframe map, e.g. to export it. Called on the mapper's thread.
@@ -129,7 +120,7 @@ class MappingModule {
 class MappingThread {
  public:
   ~MappingThread();
-  void start(MapperQueue* queue, MappingModule* mapper);
+  Status start(MapperQueue* queue, MappingModule* mapper, const ThreadPlacement& placement);
   void notify();
   // Drains what is queued, finishes the keyframe in progress, and joins.
   void stop();

@@ -39,6 +39,10 @@ struct PoseLinkCounters {
   uint64_t status_texts_sent = 0;
 };
 
+// The receiving side's inverse of PoseLink's frames: the camera pose T_w_c (world = the first
+// camera) an ODOMETRY describes, given the same body-from-camera extrinsics.
+SE3 camera_pose_of(const mavlink::Odometry& o, const SE3& T_b_c);
+
 class PoseLink {
  public:
   void init(const PoseLinkConfig& config, ByteLink* link);

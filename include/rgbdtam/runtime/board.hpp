@@ -1,0 +1,61 @@
+#pragma once
+// A board definition (board/<name>/board.conf): the target's CPU and build preset, sensor,
+// pose link, GPIO lines, thread placement and capacity overrides, read with the same
+// `key = value` schema machinery as params and validated at start-up. Boards are data: no code
+// in src/ knows a board by name.
+
+#include "rgbdtam/core/se3.hpp"
+#include "rgbdtam/core/status.hpp"
+#include "rgbdtam/runtime/key_value.hpp"
+#include "rgbdtam/runtime/params.hpp"
+#include "rgbdtam/runtime/thread_placement.hpp"
+
+namespace rgbdtam {
+
+struct Board {
+  char name[kTextBytes] = "";
+  char description[kTextBytes] = "";
+  char cpu[kTextBytes] = "";     // -mcpu for its preset, e.g. cortex-a72
+  char preset[kTextBytes] = "";  // the CMake preset that builds for it
+  int cpu_count = 1;             // cores the thread placement may name
+
+  char sensor_kind[kTextBytes] = "";    // replay | openni2 | freenect | v4l2
+  char sensor_device[kTextBytes] = "";  // replay: a TUM folder; else a device path or URI
+  char sensor_config[kTextBytes] = "";  // the camera/tracking params file (config/)
+  double sensor_fps = 30.0;
+
+  char link_kind[kTextBytes] = "";        // udp | serial
+  char link_udp_remote[kTextBytes] = "";  // ip:port
+  char link_serial_device[kTextBytes] = "";
+  int link_baud = 921600;
+  int link_system_id = 1;
+  int link_component_id = 197;  // MAV_COMP_ID_VISUAL_INERTIAL_ODOMETRY
+  SE3 T_b_c;                    // body from camera; "qw qx qy qz tx ty tz"
+
+  char gpio_chip[kTextBytes] = "";  // empty: no GPIO
+  int gpio_led_line = -1;           // status LED, -1 = none
+  int gpio_trigger_line = -1;       // frame trigger output to the sensor, -1 = none
+
+  ThreadPlacement tracker, mapper, link;
+
+  // Capacity overrides on the params (0 = keep the params file's value).
+  int keyframe_pool = 0;
+  int map_queue_frames = 0;
+  int map_seeds = 0;
+
+  char directory[kTextBytes] = "";  // the board folder; relative paths in the file start here
+};
+
+// Parses a board file's text (source names it in errors) and resolves its relative paths
+// against board_dir (the folder the file is in).
+Status parse_board(const char* text, const char* source, const char* board_dir, Board* out);
+// One `key=value` override, e.g. from the command line (paths relative to the caller).
+Status set_board_value(const char* assignment, Board* out);
+// Consistency checks beyond each key's own range (names the board and the key).
+Status validate_board(const Board& b);
+// The capacity overrides applied on a params struct.
+Status apply_board_capacity(const Board& b, Params* p);
+// The udp endpoint "a.b.c.d:port" split; false when malformed.
+bool split_endpoint(const char* endpoint, char* ip, int ip_size, uint16_t* port);
+
+}  // namespace rgbdtam

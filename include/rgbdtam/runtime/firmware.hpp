@@ -1,0 +1,71 @@
+#pragma once
+// The firmware runtime on a board: the tracker task at the sensor's cadence on the caller's
+// thread, the mapper and the link on their own threads (placed as the board says), the status
+// LED and frame trigger on GPIO. Modules talk only through bounded SPSC queues of fixed-size
+// messages (tracker -> mapper frames, tracker -> link poses and events).
+//
+// Cadence: each frame's deadline is one sensor period after the sensor delivered it. The
+// tracker never blocks; when it falls behind, the sensor side keeps the newest frame and
+// drops the older ones (counted there), and every frame finishing after its deadline is
+// counted here as a miss.
+
+#include <cstdint>
+
+#include "rgbdtam/runtime/board.hpp"
+#include "rgbdtam/runtime/latency_stats.hpp"
+#include "rgbdtam/runtime/link_task.hpp"
+#include "rgbdtam/runtime/slam_system.hpp"
+#include "rgbdtam/runtime/status_led.hpp"
+
+namespace rgbdtam {
+
+struct FirmwareCounters {
+  uint32_t frames = 0;
+  uint32_t tracked = 0;
+  uint32_t lost = 0;
+  uint32_t deadline_misses = 0;
+  uint32_t sensor_errors = 0;
+  uint32_t status_texts = 0;  // events posted to the link
+};
+
+class FirmwareRuntime {
+ public:
+  static constexpr int kLinkQueueSlots = 16;
+  // Allocates everything. The mapper always runs on its own thread here.
+  Status init(const Params& params, const Board& board, ByteLink* link, GpioOutputs* gpio,
+              ClockFn clock);
+  // Starts the mapper and link threads with the board's placement.
+  Status start();
+  // The tracker task for one frame the sensor delivered at arrival_ns.
+  PoseEstimate on_frame(const SensorFrame& frame, int64_t arrival_ns);
+  // A frame the sensor could not deliver (its message goes to the link).
+  void on_sensor_error(const Status& error, int64_t now_ns);
+  // Lets the mapper and the link finish, and joins them.
+  void stop();
+
+  const FirmwareCounters& counters() const { return counters_; }
+  const LatencyStats& tracker_time() const { return tracker_time_; }
+  const SlamSystem& slam() const { return slam_; }
+  const LinkTask& link() const { return link_; }
+  const StatusLed& led() const { return led_; }
+
+ private:
+  void post_event(uint8_t severity, const char* text);
+
+  Params params_;
+  Board board_;
+  ClockFn clock_ = nullptr;
+  GpioOutputs* gpio_ = nullptr;
+  int64_t period_ns_ = 0;
+  SlamSystem slam_;
+  LinkTask link_;
+  StatusLed led_;
+  LatencyStats tracker_time_;
+  FirmwareCounters counters_;
+  bool lost_ = false;
+  bool pool_full_reported_ = false;
+  int64_t fault_until_ns_ = 0;  // the LED shows a fault for a while after a sensor error
+  bool started_ = false;
+};
+
+}  // namespace rgbdtam

@@ -1,0 +1,52 @@
+#pragma once
+// Human-editable `key = value` files (# comments) read against one schema table: each key's
+// type, range, unit and meaning, used to validate, print and document. Params (config/) and
+// board definitions (board/) both use it. Errors name the file, the line and the key.
+
+#include <cstddef>
+#include <cstdint>
+
+#include "rgbdtam/core/status.hpp"
+
+namespace rgbdtam {
+
+enum class ValueType {
+  kReal,              // double
+  kFloat,             // float
+  kInt,               // int, whole numbers only
+  kBool,              // true/false/1/0
+  kMillisecondsAsNs,  // written in ms, stored as int64_t ns
+  kText,              // char[kTextBytes]
+  kCustom,            // parsed and printed by the spec's own functions
+};
+
+constexpr int kTextBytes = 128;
+
+struct KeySpec {
+  const char* key;
+  ValueType type;
+  double min, max;  // numbers only
+  const char* unit;
+  const char* doc;
+  void* (*field)(void* target);
+  bool required;
+  // kCustom only: false when value is not valid (error names the key and doc).
+  bool (*parse)(const char* value, void* field) = nullptr;
+  void (*print)(const void* field, char* out, size_t size) = nullptr;
+};
+
+struct KeyTable {
+  const KeySpec* specs;
+  int count;
+};
+
+// Parses a whole file's text into target. seen (count entries) records the keys found; a
+// required key that is missing is an error. target is left partly written on error.
+Status parse_key_values(const char* text, const char* source, const KeyTable& table, void* target);
+// Applies one `key=value` assignment (e.g. a command-line override).
+Status apply_key_value(const char* assignment, const char* source, const KeyTable& table,
+                       void* target);
+// Writes every key with its current value, unit and meaning, one per line.
+void print_key_values(const KeyTable& table, void* target, char* buf, int size);
+
+}  // namespace rgbdtam

@@ -1,0 +1,63 @@
+#pragma once
+// The link task: its own thread takes poses and events from the tracker through a bounded
+// SPSC queue and hands them to the PoseLink (MAVLink over a ByteLink). The tracker never
+// waits: a full queue drops the message and counts it.
+
+#include <atomic>
+#include <condition_variable>
+#include <mutex>
+#include <thread>
+
+#include "rgbdtam/runtime/latency_stats.hpp"
+#include "rgbdtam/runtime/pose_link.hpp"
+#include "rgbdtam/runtime/spsc_ring.hpp"
+#include "rgbdtam/runtime/thread_placement.hpp"
+
+namespace rgbdtam {
+
+struct LinkMessage {
+  enum class Kind : uint8_t { kPose, kStatus };
+  Kind kind = Kind::kPose;
+  PoseEstimate pose;
+  uint8_t severity = 0;
+  char text[51] = {};
+};
+
+using ClockFn = int64_t (*)();
+
+class LinkTask {
+ public:
+  ~LinkTask();
+  void init(const PoseLinkConfig& config, ByteLink* link, int queue_slots, ClockFn clock);
+  Status start(const ThreadPlacement& placement);
+  // Tracker thread. False when the queue was full (the message is dropped and counted).
+  bool post_pose(const PoseEstimate& pose);
+  bool post_status(uint8_t severity, const char* text);
+  // MAV_STATE for the heartbeat.
+  void set_system_status(uint8_t state) { system_status_.store(state, std::memory_order_relaxed); }
+  // Sends what is queued, then joins.
+  void stop();
+
+  uint64_t queue_drops() const { return queue_drops_.load(std::memory_order_relaxed); }
+  // Read after stop().
+  const PoseLinkCounters& counters() const { return link_.counters(); }
+  const LatencyStats& time_per_message() const { return per_message_; }
+
+ private:
+  bool post(const LinkMessage& m);
+  void run();
+
+  PoseLink link_;
+  ByteLink* transport_ = nullptr;
+  SpscRing<LinkMessage> queue_;
+  ClockFn clock_ = nullptr;
+  LatencyStats per_message_;
+  std::atomic<uint8_t> system_status_{3};  // MAV_STATE_STANDBY
+  std::atomic<uint64_t> queue_drops_{0};
+  std::thread thread_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::atomic<bool> stopping_{false};
+};
+
+}  // namespace rgbdtam

@@ -1,0 +1,46 @@
+#pragma once
+// GPIO outputs of the runtime, behind a seam: the status LED's blink pattern and the frame
+// trigger pulse. The hardware side (libgpiod, or a fake chip for host emulation and tests)
+// implements GpioOutputs in src/hal.
+
+#include <cstdint>
+
+namespace rgbdtam {
+
+class GpioOutputs {
+ public:
+  virtual ~GpioOutputs() = default;
+  // Sets one requested output line; only the line numbers given at open are used.
+  virtual void set(int line, bool on) = 0;
+};
+
+// What the LED shows, most severe first.
+enum class LedState : uint8_t {
+  kFault,         // sensor or link failure: double flash every second
+  kLost,          // tracking lost: 5 Hz blink
+  kInitialising,  // no keyframe yet: 1 Hz blink
+  kTracking,      // steady on
+};
+
+// Blink patterns as a pure function of state and time, so tests need no clock.
+bool led_is_on(LedState state, int64_t now_ns);
+
+// Drives the LED line from the tracker's thread: writes the line only when it changes.
+class StatusLed {
+ public:
+  void init(GpioOutputs* gpio, int line) {
+    gpio_ = gpio;
+    line_ = line;
+  }
+  void update(LedState state, int64_t now_ns);
+  uint32_t transitions() const { return transitions_; }
+
+ private:
+  GpioOutputs* gpio_ = nullptr;
+  int line_ = -1;
+  bool on_ = false;
+  bool written_ = false;
+  uint32_t transitions_ = 0;
+};
+
+}  // namespace rgbdtam

@@ -1,0 +1,173 @@
+#include "run_job.hpp"
+
+#include <cstdio>
+#include <cstring>
+
+#include "rgbdtam/hal/clock.hpp"
+#include "rgbdtam/hal/file.hpp"
+#include "rgbdtam/hal/serial_link.hpp"
+#include "rgbdtam/hal/udp_link.hpp"
+
+namespace rgbdtam {
+namespace {
+constexpr size_t kMaxConfigBytes = 1 << 20;
+
+Status read_params(const char* path, Params* p) {
+  char* text = nullptr;
+  RGBDTAM_RETURN_IF_ERROR(read_text_file(path, kMaxConfigBytes, &text));
+  const Status s = parse_params(text, path, p);
+  delete[] text;
+  return s;
+}
+}  // namespace
+
+Status load_board(const char* board_dir, Board* out) {
+  char path[kTextBytes + 16];
+  std::snprintf(path, sizeof(path), "%s/board.conf", board_dir);
+  char* text = nullptr;
+  RGBDTAM_RETURN_IF_ERROR(read_text_file(path, kMaxConfigBytes, &text));
+  const Status s = parse_board(text, path, board_dir, out);
+  delete[] text;
+  return s;
+}
+
+RunJob::~RunJob() { finish(); }
+
+Status RunJob::init(const RunOptions& options) {
+  options_ = options;
+  if (options.board_dir == nullptr) {
+    return Status::error(StatusCode::kInvalidArgument, "--board <folder> is required");
+  }
+  RGBDTAM_RETURN_IF_ERROR(load_board(options.board_dir, &board_));
+  for (int i = 0; i < options.board_override_count; ++i) {
+    RGBDTAM_RETURN_IF_ERROR(set_board_value(options.board_overrides[i], &board_));
+  }
+  RGBDTAM_RETURN_IF_ERROR(validate_board(board_));
+  RGBDTAM_RETURN_IF_ERROR(read_params(board_.sensor_config, &params_));
+  for (int i = 0; i < options.param_override_count; ++i) {
+    RGBDTAM_RETURN_IF_ERROR(set_param(options.param_overrides[i], "--set", &params_));
+  }
+  if (std::strcmp(board_.sensor_kind, "replay") != 0) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "board '%s': sensor.kind '%s' has no backend in this build yet (the "
+                         "live sensor backends are the next issue); use a replay board",
+                         board_.name, board_.sensor_kind);
+  }
+  RGBDTAM_RETURN_IF_ERROR(replay_.open(board_.sensor_device, params_.camera.width_px,
+                                       params_.camera.height_px, params_.sensor.max_rgb_depth_dt_ns,
+                                       params_.sensor.depth_time_offset_ns));
+  paced_.attach(&replay_);
+  if (std::strcmp(board_.link_kind, "udp") == 0) {
+    char ip[64];
+    uint16_t port = 0;
+    (void)split_endpoint(board_.link_udp_remote, ip, sizeof(ip), &port);  // validated
+    auto udp = std::make_unique<UdpLink>();
+    RGBDTAM_RETURN_IF_ERROR(udp->open(ip, port, 0));
+    link_ = std::move(udp);
+  } else {
+    auto serial = std::make_unique<SerialLink>();
+    RGBDTAM_RETURN_IF_ERROR(
+        serial->open(board_.link_serial_device, static_cast<uint32_t>(board_.link_baud)));
+    link_ = std::move(serial);
+  }
+  if (std::strcmp(board_.gpio_chip, "fake") == 0) {
+    gpio_ = std::make_unique<FakeGpio>();
+  } else if (board_.gpio_chip[0] != '\0') {
+    auto chip = std::make_unique<LibgpiodOutputs>();
+    const int lines[] = {board_.gpio_led_line, board_.gpio_trigger_line};
+    RGBDTAM_RETURN_IF_ERROR(chip->open(board_.gpio_chip, lines, 2));
+    gpio_ = std::move(chip);
+  }
+  runtime_ = std::make_unique<FirmwareRuntime>();
+  return runtime_->init(params_, board_, link_.get(), gpio_.get(), monotonic_ns);
+}
+
+Status RunJob::start() {
+  RGBDTAM_RETURN_IF_ERROR(runtime_->start());
+  started_ns_ = last_progress_ns_ = monotonic_ns();
+  return Status::ok();
+}
+
+bool RunJob::step() {
+  if (stop_requested_.load() ||
+      (options_.max_frames > 0 &&
+       runtime_->counters().frames >= static_cast<uint32_t>(options_.max_frames))) {
+    return false;
+  }
+  SensorFrame frame;
+  Status warning;
+  const Status s = paced_.next(&frame, &warning);
+  if (s.code() == StatusCode::kEndOfStream) return false;
+  if (!s.is_ok()) {
+    std::fprintf(stderr, "rgbdtam run: %s\n", s.message());
+    runtime_->on_sensor_error(s, monotonic_ns());
+    return true;
+  }
+  if (!warning.is_ok() && options_.progress) {
+    std::fprintf(stderr, "rgbdtam run: %s\n", warning.message());
+  }
+  (void)runtime_->on_frame(frame, paced_.arrival_ns());
+  const int64_t now = monotonic_ns();
+  if (options_.progress && now - last_progress_ns_ >= 1'000'000'000) {
+    last_progress_ns_ = now;
+    const FirmwareCounters& c = runtime_->counters();
+    std::fprintf(stderr,
+                 "\r%u frames, %u tracked, %u lost, %u deadline misses, %u dropped, tracker "
+                 "%.1f ms median",
+                 c.frames, c.tracked, c.lost, c.deadline_misses, paced_.dropped(),
+                 runtime_->tracker_time().percentile_ms(0.5));
+  }
+  return true;
+}
+
+void RunJob::finish() {
+  if (finished_ || runtime_ == nullptr) return;
+  finished_ = true;
+  wall_ns_ = monotonic_ns() - started_ns_;
+  runtime_->stop();
+  if (options_.progress) std::fprintf(stderr, "\n");
+}
+
+void RunJob::print_summary() const {
+  const FirmwareCounters& c = runtime_->counters();
+  const LatencyStats& t = runtime_->tracker_time();
+  const double seconds = wall_ns_ * 1e-9;
+  std::printf("board: %s (%s); sensor %s at %.0f Hz, link %s %s\n", board_.name, board_.description,
+              board_.sensor_kind, board_.sensor_fps, board_.link_kind,
+              std::strcmp(board_.link_kind, "udp") == 0 ? board_.link_udp_remote
+                                                        : board_.link_serial_device);
+  std::printf(
+      "frames: %u in %.1f s (%.1f Hz); tracked %u, lost %u; sensor errors %u, dropped "
+      "(newest kept) %u\n",
+      c.frames, seconds, seconds > 0 ? c.frames / seconds : 0.0, c.tracked, c.lost, c.sensor_errors,
+      paced_.dropped());
+  std::printf("cadence: %u deadline misses (deadline %.1f ms after arrival)\n", c.deadline_misses,
+              1e3 / board_.sensor_fps);
+  std::printf("tracker task ms: median %.2f, p95 %.2f, max %.2f\n", t.percentile_ms(0.5),
+              t.percentile_ms(0.95), t.max_ms());
+  const MappingModule& m = runtime_->slam().mapper();
+  std::printf("mapper task ms/keyframe: median %.1f, p95 %.1f, max %.1f over %u keyframes\n",
+              m.time_per_keyframe().percentile_ms(0.5), m.time_per_keyframe().percentile_ms(0.95),
+              m.time_per_keyframe().max_ms(), m.counters().keyframes_mapped);
+  const LinkTask& l = runtime_->link();
+  const PoseLinkCounters& lc = l.counters();
+  const LinkCounters& tc = link_->counters();
+  std::printf("link task ms/message: median %.3f, p95 %.3f, max %.3f\n",
+              l.time_per_message().percentile_ms(0.5), l.time_per_message().percentile_ms(0.95),
+              l.time_per_message().max_ms());
+  std::printf(
+      "link: ODOMETRY %llu sent, %llu rate-limited, %llu refused; HEARTBEAT %llu, "
+      "STATUSTEXT %llu; queue drops %llu; transport tx %llu frames %llu bytes, drops "
+      "%llu, errors %llu\n",
+      static_cast<unsigned long long>(lc.odometry_sent),
+      static_cast<unsigned long long>(lc.odometry_rate_limited),
+      static_cast<unsigned long long>(lc.odometry_refused),
+      static_cast<unsigned long long>(lc.heartbeats_sent),
+      static_cast<unsigned long long>(lc.status_texts_sent),
+      static_cast<unsigned long long>(l.queue_drops()),
+      static_cast<unsigned long long>(tc.tx_frames), static_cast<unsigned long long>(tc.tx_bytes),
+      static_cast<unsigned long long>(tc.drops), static_cast<unsigned long long>(tc.errors));
+  std::printf("gpio: status LED %u transitions\n", runtime_->led().transitions());
+}
+
+}  // namespace rgbdtam

@@ -1,0 +1,65 @@
+#pragma once
+// `rgbdtam run --board board/<name>`: the firmware runtime on a board definition. The sensor,
+// link and GPIO backends are chosen from the board's data; host emulation is the replay sensor
+// paced at its recorded rate, UDP on loopback and the fake GPIO chip.
+
+#include <atomic>
+#include <memory>
+
+#include "rgbdtam/hal/gpio.hpp"
+#include "rgbdtam/hal/paced_replay_source.hpp"
+#include "rgbdtam/runtime/firmware.hpp"
+
+namespace rgbdtam {
+
+struct RunOptions {
+  const char* board_dir = nullptr;
+  static constexpr int kMaxOverrides = 32;
+  const char* board_overrides[kMaxOverrides] = {};  // key=value on the board
+  int board_override_count = 0;
+  const char* param_overrides[kMaxOverrides] = {};  // key=value on its params file
+  int param_override_count = 0;
+  int max_frames = 0;  // 0: the whole stream
+  bool progress = true;
+};
+
+// Reads board_dir/board.conf and validates it.
+Status load_board(const char* board_dir, Board* out);
+
+class RunJob {
+ public:
+  ~RunJob();
+  // Allocates everything; starts no thread.
+  Status init(const RunOptions& options);
+  // Starts the mapper and link threads.
+  Status start();
+  // One frame at the sensor's cadence; false at the end of the stream or after request_stop().
+  bool step();
+  void request_stop() { stop_requested_.store(true); }
+  // Lets the mapper and the link finish, and joins them.
+  void finish();
+  void print_summary() const;
+
+  const FirmwareRuntime& runtime() const { return *runtime_; }
+  const Board& board() const { return board_; }
+  uint32_t sensor_dropped() const { return paced_.dropped(); }
+  const ByteLink& link() const { return *link_; }
+  const GpioOutputs* gpio() const { return gpio_.get(); }
+
+ private:
+  RunOptions options_;
+  Board board_;
+  Params params_;
+  TumReplaySource replay_;
+  PacedReplaySource paced_;
+  std::unique_ptr<ByteLink> link_;
+  std::unique_ptr<GpioOutputs> gpio_;
+  std::unique_ptr<FirmwareRuntime> runtime_;
+  std::atomic<bool> stop_requested_{false};
+  int64_t started_ns_ = 0;
+  int64_t last_progress_ns_ = 0;
+  int64_t wall_ns_ = 0;
+  bool finished_ = false;
+};
+
+}  // namespace rgbdtam

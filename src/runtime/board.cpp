@@ -1,0 +1,204 @@
+#include "rgbdtam/runtime/board.hpp"
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+
+namespace rgbdtam {
+namespace {
+
+bool parse_pose(const char* value, void* field) {
+  double v[7];
+  int used = 0;
+  if (std::sscanf(value, "%lf %lf %lf %lf %lf %lf %lf%n", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5],
+                  &v[6], &used) != 7 ||
+      value[used] != '\0') {
+    return false;
+  }
+  const Eigen::Quaterniond q(v[0], v[1], v[2], v[3]);
+  if (std::abs(q.norm() - 1.0) > 1e-3) return false;  // a typo, not a rotation
+  *static_cast<SE3*>(field) = SE3(q, Vector3d(v[4], v[5], v[6]));
+  return true;
+}
+
+void print_pose(const void* field, char* out, size_t size) {
+  const SE3& T = *static_cast<const SE3*>(field);
+  const Eigen::Quaterniond& q = T.quaternion();
+  std::snprintf(out, size, "%.6g %.6g %.6g %.6g %.6g %.6g %.6g", q.w(), q.x(), q.y(), q.z(),
+                T.translation().x(), T.translation().y(), T.translation().z());
+}
+
+#define RGBDTAM_FIELD(expr) [](void* b) -> void* { return &static_cast<Board*>(b)->expr; }
+#define RGBDTAM_TEXT(key, doc, expr, required) \
+  { key, ValueType::kText, 0, 0, "", doc, RGBDTAM_FIELD(expr), required }
+
+const KeySpec kSpecs[] = {
+    RGBDTAM_TEXT("board.name", "the board's name", name, true),
+    RGBDTAM_TEXT("board.description", "what it is", description, false),
+    RGBDTAM_TEXT("build.cpu", "-mcpu of its build, e.g. cortex-a72 (host: empty)", cpu, false),
+    RGBDTAM_TEXT("build.preset", "the CMake preset that builds for it", preset, true),
+    {"board.cpu_count", ValueType::kInt, 1, 256, "", "CPU cores thread placement may name",
+     RGBDTAM_FIELD(cpu_count), true},
+    RGBDTAM_TEXT("sensor.kind", "replay, openni2, freenect or v4l2", sensor_kind, true),
+    RGBDTAM_TEXT("sensor.device", "replay: TUM folder; else device path or URI", sensor_device,
+                 true),
+    RGBDTAM_TEXT("sensor.config", "camera and tracking params file", sensor_config, true),
+    {"sensor.fps", ValueType::kReal, 1, 120, "Hz", "frame rate: the tracking cadence",
+     RGBDTAM_FIELD(sensor_fps), false},
+    RGBDTAM_TEXT("link.kind", "udp or serial", link_kind, true),
+    RGBDTAM_TEXT("link.udp_remote", "udp: controller endpoint ip:port", link_udp_remote, false),
+    RGBDTAM_TEXT("link.serial_device", "serial: the port, e.g. /dev/ttyAMA0", link_serial_device,
+                 false),
+    {"link.baud", ValueType::kInt, 9600, 3000000, "baud", "serial: line rate",
+     RGBDTAM_FIELD(link_baud), false},
+    {"link.system_id", ValueType::kInt, 1, 255, "", "MAVLink system id",
+     RGBDTAM_FIELD(link_system_id), false},
+    {"link.component_id", ValueType::kInt, 1, 255, "", "MAVLink component id",
+     RGBDTAM_FIELD(link_component_id), false},
+    {"link.T_b_c", ValueType::kCustom, 0, 0, "", "body from camera: qw qx qy qz tx ty tz (m)",
+     RGBDTAM_FIELD(T_b_c), false, parse_pose, print_pose},
+    RGBDTAM_TEXT("gpio.chip", "GPIO chip device (empty: no GPIO)", gpio_chip, false),
+    {"gpio.led_line", ValueType::kInt, -1, 1023, "", "status LED line (-1: none)",
+     RGBDTAM_FIELD(gpio_led_line), false},
+    {"gpio.trigger_line", ValueType::kInt, -1, 1023, "", "frame trigger line (-1: none)",
+     RGBDTAM_FIELD(gpio_trigger_line), false},
+    {"threads.tracker_cpu", ValueType::kInt, -1, 255, "", "tracker CPU (-1: any)",
+     RGBDTAM_FIELD(tracker.cpu), false},
+    {"threads.tracker_priority", ValueType::kInt, 0, 99, "", "tracker SCHED_FIFO (0: normal)",
+     RGBDTAM_FIELD(tracker.priority), false},
+    {"threads.mapper_cpu", ValueType::kInt, -1, 255, "", "mapper CPU (-1: any)",
+     RGBDTAM_FIELD(mapper.cpu), false},
+    {"threads.mapper_priority", ValueType::kInt, 0, 99, "", "mapper SCHED_FIFO (0: normal)",
+     RGBDTAM_FIELD(mapper.priority), false},
+    {"threads.link_cpu", ValueType::kInt, -1, 255, "", "link CPU (-1: any)",
+     RGBDTAM_FIELD(link.cpu), false},
+    {"threads.link_priority", ValueType::kInt, 0, 99, "", "link SCHED_FIFO (0: normal)",
+     RGBDTAM_FIELD(link.priority), false},
+    {"capacity.keyframe_pool", ValueType::kInt, 0, 4096, "", "override map.keyframe_pool (0: keep)",
+     RGBDTAM_FIELD(keyframe_pool), false},
+    {"capacity.map_queue_frames", ValueType::kInt, 0, 64, "", "override map.queue_frames (0: keep)",
+     RGBDTAM_FIELD(map_queue_frames), false},
+    {"capacity.map_seeds", ValueType::kInt, 0, 100000, "", "override map.seeds (0: keep)",
+     RGBDTAM_FIELD(map_seeds), false},
+};
+#undef RGBDTAM_TEXT
+#undef RGBDTAM_FIELD
+
+constexpr KeyTable kTable{kSpecs, sizeof(kSpecs) / sizeof(kSpecs[0])};
+
+bool one_of(const char* value, const char* const* options, int n) {
+  for (int i = 0; i < n; ++i)
+    if (std::strcmp(value, options[i]) == 0) return true;
+  return false;
+}
+
+// Prefixes a relative path with dir (in place); false when the result does not fit.
+bool resolve(char* path, const char* dir) {
+  if (path[0] == '\0' || path[0] == '/' || std::strchr(path, ':') != nullptr) return true;
+  char joined[kTextBytes];
+  const int n = std::snprintf(joined, sizeof(joined), "%s/%s", dir, path);
+  if (n < 0 || n >= kTextBytes) return false;
+  std::memcpy(path, joined, static_cast<size_t>(n) + 1);
+  return true;
+}
+}  // namespace
+
+Status parse_board(const char* text, const char* source, const char* board_dir, Board* out) {
+  Board b;
+  RGBDTAM_RETURN_IF_ERROR(parse_key_values(text, source, kTable, &b));
+  if (std::snprintf(b.directory, sizeof(b.directory), "%s", board_dir) >= kTextBytes) {
+    return Status::error(StatusCode::kInvalidArgument, "%s: folder path too long", source);
+  }
+  // A replay folder, params file or device path written relative to the board folder.
+  const bool replay = std::strcmp(b.sensor_kind, "replay") == 0;
+  if (!resolve(b.sensor_config, board_dir) || (replay && !resolve(b.sensor_device, board_dir))) {
+    return Status::error(StatusCode::kInvalidArgument, "%s: a resolved path is too long", source);
+  }
+  *out = b;
+  return Status::ok();
+}
+
+Status set_board_value(const char* assignment, Board* out) {
+  return apply_key_value(assignment, "--board-set", kTable, out);
+}
+
+bool split_endpoint(const char* endpoint, char* ip, int ip_size, uint16_t* port) {
+  const char* colon = std::strrchr(endpoint, ':');
+  if (colon == nullptr || colon == endpoint || colon - endpoint >= ip_size) return false;
+  char* end = nullptr;
+  const long p = std::strtol(colon + 1, &end, 10);
+  if (end == colon + 1 || *end != '\0' || p < 1 || p > 65535) return false;
+  std::memcpy(ip, endpoint, static_cast<size_t>(colon - endpoint));
+  ip[colon - endpoint] = '\0';
+  *port = static_cast<uint16_t>(p);
+  return true;
+}
+
+Status validate_board(const Board& b) {
+  static const char* const kSensors[] = {"replay", "openni2", "freenect", "v4l2"};
+  static const char* const kLinks[] = {"udp", "serial"};
+  if (!one_of(b.sensor_kind, kSensors, 4)) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "board '%s': sensor.kind '%s' is not replay, openni2, freenect or v4l2",
+                         b.name, b.sensor_kind);
+  }
+  if (!one_of(b.link_kind, kLinks, 2)) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "board '%s': link.kind '%s' is not udp or serial", b.name, b.link_kind);
+  }
+  if (std::strcmp(b.link_kind, "udp") == 0) {
+    char ip[64];
+    uint16_t port = 0;
+    if (!split_endpoint(b.link_udp_remote, ip, sizeof(ip), &port)) {
+      return Status::error(StatusCode::kInvalidArgument,
+                           "board '%s': link.udp_remote '%s' is not ip:port", b.name,
+                           b.link_udp_remote);
+    }
+  } else if (b.link_serial_device[0] == '\0') {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "board '%s': link.kind serial needs link.serial_device", b.name);
+  }
+  const struct {
+    const char* key;
+    const ThreadPlacement& t;
+  } threads[] = {{"threads.tracker_cpu", b.tracker},
+                 {"threads.mapper_cpu", b.mapper},
+                 {"threads.link_cpu", b.link}};
+  for (const auto& t : threads) {
+    if (t.t.cpu >= b.cpu_count) {
+      return Status::error(StatusCode::kInvalidArgument,
+                           "board '%s': %s is %d, but the board has %d CPUs (0-%d)", b.name, t.key,
+                           t.t.cpu, b.cpu_count, b.cpu_count - 1);
+    }
+  }
+  if ((b.gpio_led_line >= 0 || b.gpio_trigger_line >= 0) && b.gpio_chip[0] == '\0') {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "board '%s': GPIO lines are set but gpio.chip is empty", b.name);
+  }
+  if (b.gpio_led_line >= 0 && b.gpio_led_line == b.gpio_trigger_line) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "board '%s': gpio.led_line and gpio.trigger_line are both %d", b.name,
+                         b.gpio_led_line);
+  }
+  return Status::ok();
+}
+
+Status apply_board_capacity(const Board& b, Params* p) {
+  const struct {
+    const char* key;
+    int value;
+  } overrides[] = {{"map.keyframe_pool", b.keyframe_pool},
+                   {"map.queue_frames", b.map_queue_frames},
+                   {"map.seeds", b.map_seeds}};
+  char source[kTextBytes + 16];
+  std::snprintf(source, sizeof(source), "board '%s'", b.name);
+  for (const auto& o : overrides) {
+    if (o.value == 0) continue;
+    char assignment[64];
+    std::snprintf(assignment, sizeof(assignment), "%s=%d", o.key, o.value);
+    RGBDTAM_RETURN_IF_ERROR(set_param(assignment, source, p));
+  }
+  return Status::ok();
+}
+
+}  // namespace rgbdtam

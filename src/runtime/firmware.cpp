@@ -1,0 +1,95 @@
+#include "rgbdtam/runtime/firmware.hpp"
+
+#include <cstring>
+
+namespace rgbdtam {
+
+Status FirmwareRuntime::init(const Params& params, const Board& board, ByteLink* link,
+                             GpioOutputs* gpio, ClockFn clock) {
+  RGBDTAM_RETURN_IF_ERROR(validate_board(board));
+  params_ = params;
+  params_.map_threaded = true;
+  RGBDTAM_RETURN_IF_ERROR(apply_board_capacity(board, &params_));
+  board_ = board;
+  clock_ = clock;
+  gpio_ = gpio;
+  period_ns_ = static_cast<int64_t>(1e9 / board.sensor_fps);
+  RGBDTAM_RETURN_IF_ERROR(slam_.init(params_, clock, nullptr));
+  PoseLinkConfig link_config;
+  link_config.system_id = static_cast<uint8_t>(board.link_system_id);
+  link_config.component_id = static_cast<uint8_t>(board.link_component_id);
+  link_config.T_b_c = board.T_b_c;
+  link_.init(link_config, link, kLinkQueueSlots, clock);
+  led_.init(gpio, board.gpio_led_line);
+  return Status::ok();
+}
+
+Status FirmwareRuntime::start() {
+  RGBDTAM_RETURN_IF_ERROR(slam_.start(board_.mapper));
+  RGBDTAM_RETURN_IF_ERROR(link_.start(board_.link));
+  started_ = true;
+  return Status::ok();
+}
+
+void FirmwareRuntime::post_event(uint8_t severity, const char* text) {
+  if (link_.post_status(severity, text)) ++counters_.status_texts;
+}
+
+PoseEstimate FirmwareRuntime::on_frame(const SensorFrame& frame, int64_t arrival_ns) {
+  const int64_t t0 = clock_();
+  const bool trigger = gpio_ != nullptr && board_.gpio_trigger_line >= 0;
+  if (trigger) gpio_->set(board_.gpio_trigger_line, true);  // the next exposure starts now
+  const PoseEstimate pose = slam_.process(frame);
+  ++counters_.frames;
+  const bool valid = (pose.flags & kPoseValid) != 0;
+  if (valid) ++counters_.tracked;
+  if ((pose.flags & kLost) != 0) ++counters_.lost;
+  // Events on transitions only, so that a long loss is one message, not one per frame.
+  if ((pose.flags & kLost) != 0 && !lost_) {
+    lost_ = true;
+    post_event(mavlink::kMavSeverityWarning, "rgbdtam: tracking lost");
+  } else if (valid && lost_) {
+    lost_ = false;
+    post_event(mavlink::kMavSeverityInfo, "rgbdtam: tracking regained");
+  }
+  if (!pool_full_reported_ && slam_.tracking().keyframes().recycled() > 0) {
+    pool_full_reported_ = true;
+    post_event(mavlink::kMavSeverityInfo, "rgbdtam: keyframe pool full, recycling oldest");
+  }
+  (void)link_.post_pose(pose);
+  const int64_t now = clock_();
+  LedState state = valid                                 ? LedState::kTracking
+                   : (pose.flags & kNotInitialised) != 0 ? LedState::kInitialising
+                                                         : LedState::kLost;
+  if (now < fault_until_ns_) state = LedState::kFault;
+  link_.set_system_status(state == LedState::kTracking       ? mavlink::kMavStateActive
+                          : state == LedState::kInitialising ? mavlink::kMavStateStandby
+                                                             : mavlink::kMavStateCritical);
+  led_.update(state, now);
+  if (trigger) gpio_->set(board_.gpio_trigger_line, false);
+  const int64_t done = clock_();
+  tracker_time_.add(done - t0);
+  if (done > arrival_ns + period_ns_) ++counters_.deadline_misses;
+  return pose;
+}
+
+void FirmwareRuntime::on_sensor_error(const Status& error, int64_t now_ns) {
+  ++counters_.sensor_errors;
+  fault_until_ns_ = now_ns + 2'000'000'000;
+  // STATUSTEXT holds 50 characters: the start of the message, which names the problem.
+  constexpr char kPrefix[] = "sensor: ";
+  char text[51] = {};
+  std::memcpy(text, kPrefix, sizeof(kPrefix) - 1);
+  const size_t room = sizeof(text) - sizeof(kPrefix);
+  std::memcpy(text + sizeof(kPrefix) - 1, error.message(), strnlen(error.message(), room));
+  post_event(mavlink::kMavSeverityError, text);
+}
+
+void FirmwareRuntime::stop() {
+  if (!started_) return;
+  started_ = false;
+  slam_.finish();
+  link_.stop();
+}
+
+}  // namespace rgbdtam

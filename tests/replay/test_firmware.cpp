@@ -1,0 +1,142 @@
+// rgbdtam run on the host-emulation board, end to end: the committed clip at its recorded
+// rate, MAVLink over UDP to this test acting as the monitor. Every frame's ODOMETRY arrives
+// intact, the received trajectory is as accurate as replay's, the frame trigger pulses once
+// per frame, and sensor errors reach the operator as STATUSTEXT and a fault blink.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "evaluate_command.hpp"
+#include "replay_runner.hpp"
+#include "rgbdtam/hal/tum_trajectory.hpp"
+#include "rgbdtam/hal/udp_link.hpp"
+#include "run_job.hpp"
+#include "test_paths.hpp"
+#include "tum_writer.hpp"
+
+namespace rgbdtam {
+namespace {
+
+struct Monitor {
+  UdpLink udp;
+  mavlink::Decoder decoder;
+  std::vector<StampedPose> poses;
+  int odometry = 0, lost = 0, heartbeats = 0;
+  std::vector<std::string> texts;
+  void drain(const SE3& T_b_c) {
+    uint8_t buf[2048];
+    for (size_t n; (n = udp.receive(buf, sizeof(buf))) > 0;) {
+      mavlink::Frame f;
+      size_t used = 0;
+      for (bool got = true; got;) {
+        used += decoder.feed(buf + used, n - used, &f, &got);
+        if (!got) break;
+        if (f.message_id == mavlink::kOdometry.id) {
+          mavlink::Odometry o;
+          mavlink::unpack(f.payload, f.length, &o);
+          ++odometry;
+          if (o.quality < 0) {
+            ++lost;
+          } else {
+            poses.push_back({o.time_usec * 1e-6, camera_pose_of(o, T_b_c)});
+          }
+        } else if (f.message_id == mavlink::kHeartbeat.id) {
+          ++heartbeats;
+        } else if (f.message_id == mavlink::kStatusText.id) {
+          mavlink::StatusText t;
+          mavlink::unpack(f.payload, f.length, &t);
+          texts.emplace_back(t.text, strnlen(t.text, sizeof(t.text)));
+        }
+      }
+    }
+  }
+};
+
+// Runs the host-emulation board with its link pointed at the monitor.
+void run_board(Monitor* monitor, RunJob* job, std::vector<std::string> overrides) {
+  ASSERT_TRUE(monitor->udp.open(nullptr, 0, 0).is_ok());
+  overrides.push_back("link.udp_remote=127.0.0.1:" + std::to_string(monitor->udp.local_port()));
+  static std::vector<std::string> keep;  // the options point into these
+  keep = overrides;
+  static const std::string board = testing::source_path("board/host-emulation");
+  RunOptions options;
+  options.board_dir = board.c_str();
+  for (const std::string& o : keep)
+    options.board_overrides[options.board_override_count++] = o.c_str();
+  options.progress = false;
+  ASSERT_TRUE(job->init(options).is_ok());
+  ASSERT_TRUE(job->start().is_ok());
+  while (job->step()) monitor->drain(job->board().T_b_c);
+  job->finish();
+  monitor->drain(job->board().T_b_c);
+}
+
+TEST(Firmware, HostEmulationStreamsEveryPoseAndMatchesReplay) {
+  Monitor monitor;
+  RunJob job;
+  run_board(&monitor, &job, {});
+  const FirmwareCounters& c = job.runtime().counters();
+  EXPECT_EQ(c.frames + job.sensor_dropped(), 50u);
+  EXPECT_EQ(monitor.odometry, static_cast<int>(c.frames));
+  EXPECT_EQ(static_cast<int>(monitor.poses.size()), static_cast<int>(c.tracked));
+  EXPECT_EQ(monitor.decoder.counters().crc_errors, 0u);
+  EXPECT_EQ(monitor.decoder.counters().lost_frames, 0u);
+  EXPECT_GE(monitor.heartbeats, 1);
+  // One trigger pulse per tracked frame on the fake chip.
+  const auto* gpio = static_cast<const FakeGpio*>(job.gpio());
+  ASSERT_NE(gpio, nullptr);
+  EXPECT_EQ(gpio->rising_edges(job.board().gpio_trigger_line), c.frames);
+  EXPECT_TRUE(gpio->level(job.board().gpio_led_line)) << "tracking: the LED is steady on";
+
+  // What the monitor received is what replay estimates, to float precision on the wire.
+  const std::string clip = testing::source_path("data/tum_fr1_xyz_clip");
+  const auto replay = testing::replay_and_evaluate(
+      clip, testing::source_path("config/tum_fr1.conf"), "map.threaded=true");
+  ASSERT_TRUE(replay.ran);
+  std::vector<StampedPose> gt;
+  int bad = 0;
+  ASSERT_TRUE(read_tum_trajectory((clip + "/groundtruth.txt").c_str(), &gt, &bad).is_ok());
+  const EvaluationReport received = evaluate_all(gt, monitor.poses, nullptr);
+  ASSERT_TRUE(received.ate_ok);
+  std::printf(
+      "clip over the link: ATE %.3f cm (replay %.3f cm), %d ODOMETRY, %u deadline misses, "
+      "%u dropped\n",
+      received.ate.rmse_m * 100, replay.report.ate.rmse_m * 100, monitor.odometry,
+      c.deadline_misses, job.sensor_dropped());
+  if (job.sensor_dropped() == 0) {  // under qemu the emulated CPU cannot keep the cadence
+    EXPECT_NEAR(received.ate.rmse_m, replay.report.ate.rmse_m, 0.001);
+  }
+}
+
+TEST(Firmware, SensorErrorsReachTheOperatorAsStatusTextAndAFaultBlink) {
+  testing::SyntheticScene scene = testing::SyntheticScene::half_resolution();
+  const std::string dir = testing::make_temp_dir("firmware_broken");
+  ASSERT_TRUE(testing::write_synthetic_sequence(dir, scene, 12, 10.0));
+  ASSERT_TRUE(testing::write_text(dir + "/camera.conf", testing::synthetic_config(scene)));
+  // Frame 5's colour image is cut short: the sensor cannot deliver it.
+  std::ifstream list(dir + "/rgb.txt");
+  std::string line, stamp, path;
+  for (int entry = 0; entry <= 5 && std::getline(list, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream(line) >> stamp >> path;
+    ++entry;
+  }
+  ASSERT_TRUE(testing::write_text(dir + "/" + path, "\x89PNG\r\n"));
+  Monitor monitor;
+  RunJob job;
+  run_board(&monitor, &job, {"sensor.device=" + dir, "sensor.config=" + dir + "/camera.conf"});
+  const FirmwareCounters& c = job.runtime().counters();
+  EXPECT_EQ(c.sensor_errors, 1u);
+  bool reported = false;
+  for (const std::string& t : monitor.texts) reported |= t.rfind("sensor: ", 0) == 0;
+  EXPECT_TRUE(reported) << "no STATUSTEXT for the sensor error";
+  EXPECT_GT(job.runtime().led().transitions(), 0u) << "the LED must blink a fault";
+  EXPECT_EQ(monitor.odometry, static_cast<int>(c.frames));
+}
+
+}  // namespace
+}  // namespace rgbdtam

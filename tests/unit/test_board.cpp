@@ -1,0 +1,111 @@
+// Board definitions: the shipped boards load and validate; bad ones fail with errors that
+// name the board, the file, the line and the key.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "rgbdtam/hal/file.hpp"
+#include "rgbdtam/runtime/board.hpp"
+#include "test_paths.hpp"
+
+namespace rgbdtam {
+namespace {
+
+Status load(const std::string& dir, Board* b) {
+  char* text = nullptr;
+  RGBDTAM_RETURN_IF_ERROR(read_text_file((dir + "/board.conf").c_str(), 1 << 16, &text));
+  const Status s = parse_board(text, (dir + "/board.conf").c_str(), dir.c_str(), b);
+  delete[] text;
+  return s;
+}
+
+TEST(Board, ShippedBoardsLoadAndValidate) {
+  for (const char* name : {"host-emulation", "raspberry-pi-4", "radxa-rock-5b"}) {
+    Board b;
+    const Status s = load(testing::source_path(std::string("board/") + name), &b);
+    ASSERT_TRUE(s.is_ok()) << s.message();
+    EXPECT_STREQ(b.name, name);
+    const Status v = validate_board(b);
+    EXPECT_TRUE(v.is_ok()) << v.message();
+    // The camera's optical axis is the body's forward axis on every shipped board.
+    const Vector3d forward = b.T_b_c.rotation() * Vector3d(0, 0, 1);
+    EXPECT_NEAR(forward.x(), 1.0, 1e-9) << name;
+    // Their params files exist and the capacity overrides are valid params.
+    char* text = nullptr;
+    ASSERT_TRUE(read_text_file(b.sensor_config, 1 << 20, &text).is_ok()) << b.sensor_config;
+    Params p;
+    EXPECT_TRUE(parse_params(text, b.sensor_config, &p).is_ok());
+    delete[] text;
+    EXPECT_TRUE(apply_board_capacity(b, &p).is_ok());
+  }
+}
+
+TEST(Board, HostEmulationPathsAreRelativeToTheBoardFolder) {
+  Board b;
+  ASSERT_TRUE(load(testing::source_path("board/host-emulation"), &b).is_ok());
+  char* text = nullptr;
+  const std::string rgb = std::string(b.sensor_device) + "/rgb.txt";
+  EXPECT_TRUE(read_text_file(rgb.c_str(), 1 << 20, &text).is_ok()) << rgb;
+  delete[] text;
+  ASSERT_TRUE(set_board_value("sensor.device=/elsewhere", &b).is_ok());
+  EXPECT_STREQ(b.sensor_device, "/elsewhere");
+}
+
+void expect_error(const std::string& text, const std::string& must_contain) {
+  Board b;
+  Status s = parse_board(text.c_str(), "bad.conf", "board/bad", &b);
+  if (s.is_ok()) s = validate_board(b);
+  ASSERT_FALSE(s.is_ok()) << "accepted: " << text;
+  EXPECT_NE(std::string(s.message()).find(must_contain), std::string::npos) << s.message();
+}
+
+constexpr const char* kMinimal =
+    "board.name = bad\nbuild.preset = host-release\nboard.cpu_count = 2\nsensor.kind = replay\n"
+    "sensor.device = x\nsensor.config = y\nlink.kind = udp\nlink.udp_remote = 127.0.0.1:14550\n";
+
+TEST(Board, BadBoardsAreClearErrors) {
+  Board ok;
+  ASSERT_TRUE(parse_board(kMinimal, "ok.conf", "board/ok", &ok).is_ok());
+  ASSERT_TRUE(validate_board(ok).is_ok());
+  expect_error("board.name = x\n", "missing required key 'build.preset'");
+  expect_error(std::string(kMinimal) + "sensor.kind = kinect2\n", "sensor.kind 'kinect2'");
+  expect_error(std::string(kMinimal) + "link.kind = can\n", "link.kind 'can'");
+  expect_error(std::string(kMinimal) + "link.udp_remote = 127.0.0.1\n", "link.udp_remote");
+  expect_error(std::string(kMinimal) + "link.udp_remote = 127.0.0.1:70000\n", "link.udp_remote");
+  expect_error(std::string(kMinimal) + "link.kind = serial\n", "link.serial_device");
+  expect_error(std::string(kMinimal) + "link.baud = 50\n", "bad.conf:9: key 'link.baud'");
+  expect_error(std::string(kMinimal) + "threads.mapper_cpu = 2\n",
+               "threads.mapper_cpu is 2, but the board has 2 CPUs");
+  expect_error(std::string(kMinimal) + "gpio.led_line = 3\n", "gpio.chip is empty");
+  expect_error(std::string(kMinimal) + "link.T_b_c = 1 0 0\n", "link.T_b_c");
+  expect_error(std::string(kMinimal) + "link.T_b_c = 2 0 0 0 0 0 0\n", "link.T_b_c");
+  expect_error(std::string(kMinimal) + "threads.link_priority = 120\n", "out of range");
+  expect_error(std::string(kMinimal) + "gpio.led_pin = 3\n", "unknown key 'gpio.led_pin'");
+}
+
+TEST(Board, CapacityOverridesAreCheckedLikeParams) {
+  Board b;
+  ASSERT_TRUE(parse_board((std::string(kMinimal) + "capacity.keyframe_pool = 4\n").c_str(),
+                          "small.conf", "board/small", &b)
+                  .is_ok());
+  Params p;
+  const Status s = apply_board_capacity(b, &p);
+  ASSERT_FALSE(s.is_ok());
+  EXPECT_NE(std::string(s.message()).find("board 'bad'"), std::string::npos) << s.message();
+  EXPECT_NE(std::string(s.message()).find("map.keyframe_pool"), std::string::npos);
+}
+
+TEST(Board, EndpointsSplit) {
+  char ip[32];
+  uint16_t port = 0;
+  EXPECT_TRUE(split_endpoint("192.168.1.2:14540", ip, sizeof(ip), &port));
+  EXPECT_STREQ(ip, "192.168.1.2");
+  EXPECT_EQ(port, 14540);
+  EXPECT_FALSE(split_endpoint(":14540", ip, sizeof(ip), &port));
+  EXPECT_FALSE(split_endpoint("1.2.3.4:", ip, sizeof(ip), &port));
+  EXPECT_FALSE(split_endpoint("1.2.3.4:0", ip, sizeof(ip), &port));
+  EXPECT_FALSE(split_endpoint("1.2.3.4:12x", ip, sizeof(ip), &port));
+}
+
+}  // namespace
+}  // namespace rgbdtam
