@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # The test command: host release build with every test (the full fr1_xyz test runs where the
 # sequence exists), host debug build under ASan+UBSan, and the static aarch64 build with its
-# tests under qemu-user. The slow full-sequence test is left to the release build.
+# tests under qemu-user, a build for each board's CPU, and a short fuzzing run of the MAVLink
+# decoder. The slow full-sequence test is left to the release build.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-tools/setup.sh --aarch64
+tools/setup.sh --aarch64 --fuzz
 jobs=$(nproc)
 
 run() {
@@ -27,5 +28,12 @@ run host-debug -LE long
 run aarch64 -LE long
 file build/aarch64/bin/rgbdtam | grep -q "ARM aarch64.*statically linked" \
   || { echo "aarch64 rgbdtam is not a static ARM binary" >&2; exit 1; }
+for board in raspberry-pi-4 radxa-rock-5b; do
+  echo "=== aarch64-$board: build rgbdtam"
+  cmake --preset "aarch64-$board" >/dev/null
+  cmake --build --preset "aarch64-$board" -j"$jobs" --target rgbdtam >/dev/null
+done
+echo "=== fuzz: MAVLink decoder"
+tools/fuzz.sh 10
 echo "=== static binaries"
-file build/bin/rgbdtam build/aarch64/bin/rgbdtam
+file build/bin/rgbdtam build/aarch64/bin/rgbdtam build/aarch64-*/bin/rgbdtam

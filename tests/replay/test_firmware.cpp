@@ -2,7 +2,14 @@
 // rate, MAVLink over UDP to this test acting as the monitor. Every frame's ODOMETRY arrives
 // intact, the received trajectory is as accurate as replay's, the frame trigger pulses once
 // per frame, and sensor errors reach the operator as STATUSTEXT and a fault blink.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <pty.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <thread>
 
 #include <cstring>
 #include <fstream>
@@ -136,6 +143,60 @@ TEST(Firmware, SensorErrorsReachTheOperatorAsStatusTextAndAFaultBlink) {
   EXPECT_TRUE(reported) << "no STATUSTEXT for the sensor error";
   EXPECT_GT(job.runtime().led().transitions(), 0u) << "the LED must blink a fault";
   EXPECT_EQ(monitor.odometry, static_cast<int>(c.frames));
+}
+
+TEST(Firmware, HostEmulationOverASerialPortAt115200CarriesEveryPose) {
+  // The link on a pseudo-terminal as the robot's UART; this test reads the other end.
+  int master = -1, slave = -1;
+  char name[128];
+  ASSERT_EQ(::openpty(&master, &slave, name, nullptr, nullptr), 0);
+  std::atomic<bool> done{false};
+  Monitor monitor;
+  std::vector<uint8_t> bytes;
+  std::thread reader([&] {
+    uint8_t buf[4096];
+    ::fcntl(master, F_SETFL, ::fcntl(master, F_GETFL) | O_NONBLOCK);
+    for (int idle = 0; !done.load() || idle < 20;) {
+      const ssize_t n = ::read(master, buf, sizeof(buf));
+      if (n > 0) {
+        bytes.insert(bytes.end(), buf, buf + n);
+        idle = 0;
+      } else {
+        ++idle;
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      }
+    }
+  });
+  RunJob job;
+  static const std::string board = testing::source_path("board/host-emulation");
+  const std::string device = std::string("link.serial_device=") + name;
+  RunOptions options;
+  options.board_dir = board.c_str();
+  options.board_overrides[options.board_override_count++] = "link.kind=serial";
+  options.board_overrides[options.board_override_count++] = "link.baud=115200";
+  options.board_overrides[options.board_override_count++] = device.c_str();
+  options.progress = false;
+  ASSERT_TRUE(job.init(options).is_ok());
+  ASSERT_TRUE(job.start().is_ok());
+  while (job.step()) {
+  }
+  job.finish();
+  done = true;
+  reader.join();
+  ::close(master);
+  ::close(slave);
+  mavlink::Frame f;
+  size_t used = 0;
+  int odometry = 0;
+  for (bool got = true; got;) {
+    used += monitor.decoder.feed(bytes.data() + used, bytes.size() - used, &f, &got);
+    odometry += got && f.message_id == mavlink::kOdometry.id;
+  }
+  const FirmwareCounters& c = job.runtime().counters();
+  EXPECT_EQ(odometry, static_cast<int>(c.frames));
+  EXPECT_EQ(job.runtime().link().counters().odometry_rate_limited, 0u);
+  EXPECT_EQ(monitor.decoder.counters().crc_errors, 0u);
+  EXPECT_EQ(job.link().counters().drops, 0u);
 }
 
 }  // namespace

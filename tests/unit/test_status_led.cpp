@@ -1,6 +1,8 @@
 // The status LED's blink patterns, and that the line is written only when it changes.
 #include <gtest/gtest.h>
 
+#include <string>
+
 #include "rgbdtam/hal/gpio.hpp"
 
 namespace rgbdtam {
@@ -50,6 +52,16 @@ TEST(StatusLed, WritesTheLineOnlyWhenItChanges) {
   none.init(&gpio, -1);
   none.update(LedState::kLost, 0);
   EXPECT_EQ(led.transitions() + 1, gpio.writes(17));
+}
+
+TEST(Gpio, AMissingChipIsAClearError) {
+  LibgpiodOutputs chip;
+  const int lines[] = {17, -1};
+  const Status s = chip.open("/dev/gpiochip-missing", lines, 2);
+  ASSERT_FALSE(s.is_ok());
+  EXPECT_NE(std::string(s.message()).find("/dev/gpiochip-missing"), std::string::npos);
+  chip.set(17, true);  // nothing was requested: a no-op, not a crash
+  EXPECT_EQ(chip.errors(), 0u);
 }
 
 }  // namespace
