@@ -56,7 +56,7 @@ Status RunJob::init(const RunOptions& options) {
   RGBDTAM_RETURN_IF_ERROR(replay_.open(board_.sensor_device, params_.camera.width_px,
                                        params_.camera.height_px, params_.sensor.max_rgb_depth_dt_ns,
                                        params_.sensor.depth_time_offset_ns));
-  paced_.attach(&replay_);
+  sensor_.open(&replay_, params_.camera.width_px, params_.camera.height_px);
   if (std::strcmp(board_.link_kind, "udp") == 0) {
     char ip[64];
     uint16_t port = 0;
@@ -84,6 +84,7 @@ Status RunJob::init(const RunOptions& options) {
 
 Status RunJob::start() {
   RGBDTAM_RETURN_IF_ERROR(runtime_->start());
+  RGBDTAM_RETURN_IF_ERROR(sensor_.start(board_.sensor));
   started_ns_ = last_progress_ns_ = monotonic_ns();
   return Status::ok();
 }
@@ -96,7 +97,7 @@ bool RunJob::step() {
   }
   SensorFrame frame;
   Status warning;
-  const Status s = paced_.next(&frame, &warning);
+  const Status s = sensor_.next(&frame, &warning);
   if (s.code() == StatusCode::kEndOfStream) return false;
   if (!s.is_ok()) {
     std::fprintf(stderr, "rgbdtam run: %s\n", s.message());
@@ -106,7 +107,7 @@ bool RunJob::step() {
   if (!warning.is_ok() && options_.progress) {
     std::fprintf(stderr, "rgbdtam run: %s\n", warning.message());
   }
-  (void)runtime_->on_frame(frame, paced_.arrival_ns());
+  (void)runtime_->on_frame(frame, sensor_.arrival_ns());
   const int64_t now = monotonic_ns();
   if (options_.progress && now - last_progress_ns_ >= 1'000'000'000) {
     last_progress_ns_ = now;
@@ -114,7 +115,7 @@ bool RunJob::step() {
     std::fprintf(stderr,
                  "\r%u frames, %u tracked, %u lost, %u deadline misses, %u dropped, tracker "
                  "%.1f ms median",
-                 c.frames, c.tracked, c.lost, c.deadline_misses, paced_.dropped(),
+                 c.frames, c.tracked, c.lost, c.deadline_misses, sensor_.dropped(),
                  runtime_->tracker_time().percentile_ms(0.5));
   }
   return true;
@@ -124,6 +125,7 @@ void RunJob::finish() {
   if (finished_ || runtime_ == nullptr) return;
   finished_ = true;
   wall_ns_ = monotonic_ns() - started_ns_;
+  sensor_.stop();
   runtime_->stop();
   if (options_.progress) std::fprintf(stderr, "\n");
 }
@@ -140,7 +142,7 @@ void RunJob::print_summary() const {
       "frames: %u in %.1f s (%.1f Hz); tracked %u, lost %u; sensor errors %u, dropped "
       "(newest kept) %u\n",
       c.frames, seconds, seconds > 0 ? c.frames / seconds : 0.0, c.tracked, c.lost, c.sensor_errors,
-      paced_.dropped());
+      sensor_.dropped());
   std::printf("cadence: %u deadline misses (deadline %.1f ms after arrival)\n", c.deadline_misses,
               1e3 / board_.sensor_fps);
   std::printf("tracker task ms: median %.2f, p95 %.2f, max %.2f\n", t.percentile_ms(0.5),

@@ -7,7 +7,7 @@
 #include <memory>
 
 #include "rgbdtam/hal/gpio.hpp"
-#include "rgbdtam/hal/paced_replay_source.hpp"
+#include "rgbdtam/hal/replay_sensor.hpp"
 #include "rgbdtam/runtime/firmware.hpp"
 
 namespace rgbdtam {
@@ -31,7 +31,7 @@ class RunJob {
   ~RunJob();
   // Allocates everything; starts no thread.
   Status init(const RunOptions& options);
-  // Starts the mapper and link threads.
+  // Starts the sensor, mapper and link threads.
   Status start();
   // One frame at the sensor's cadence; false at the end of the stream or after request_stop().
   bool step();
@@ -42,7 +42,7 @@ class RunJob {
 
   const FirmwareRuntime& runtime() const { return *runtime_; }
   const Board& board() const { return board_; }
-  uint32_t sensor_dropped() const { return paced_.dropped(); }
+  uint32_t sensor_dropped() const { return sensor_.dropped(); }
   const ByteLink& link() const { return *link_; }
   const GpioOutputs* gpio() const { return gpio_.get(); }
 
@@ -51,7 +51,7 @@ class RunJob {
   Board board_;
   Params params_;
   TumReplaySource replay_;
-  PacedReplaySource paced_;
+  ReplaySensor sensor_;
   std::unique_ptr<ByteLink> link_;
   std::unique_ptr<GpioOutputs> gpio_;
   std::unique_ptr<FirmwareRuntime> runtime_;

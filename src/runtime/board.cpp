@@ -74,6 +74,10 @@ const KeySpec kSpecs[] = {
      RGBDTAM_FIELD(link.cpu), false},
     {"threads.link_priority", ValueType::kInt, 0, 99, "", "link SCHED_FIFO (0: normal)",
      RGBDTAM_FIELD(link.priority), false},
+    {"threads.sensor_cpu", ValueType::kInt, -1, 255, "", "sensor driver CPU (-1: any)",
+     RGBDTAM_FIELD(sensor.cpu), false},
+    {"threads.sensor_priority", ValueType::kInt, 0, 99, "", "sensor driver SCHED_FIFO (0: normal)",
+     RGBDTAM_FIELD(sensor.priority), false},
     {"capacity.keyframe_pool", ValueType::kInt, 0, 4096, "", "override map.keyframe_pool (0: keep)",
      RGBDTAM_FIELD(keyframe_pool), false},
     {"capacity.map_queue_frames", ValueType::kInt, 0, 64, "", "override map.queue_frames (0: keep)",
@@ -163,7 +167,8 @@ Status validate_board(const Board& b) {
     const ThreadPlacement& t;
   } threads[] = {{"threads.tracker_cpu", b.tracker},
                  {"threads.mapper_cpu", b.mapper},
-                 {"threads.link_cpu", b.link}};
+                 {"threads.link_cpu", b.link},
+                 {"threads.sensor_cpu", b.sensor}};
   for (const auto& t : threads) {
     if (t.t.cpu >= b.cpu_count) {
       return Status::error(StatusCode::kInvalidArgument,

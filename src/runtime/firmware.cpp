@@ -25,6 +25,7 @@ Status FirmwareRuntime::init(const Params& params, const Board& board, ByteLink*
 }
 
 Status FirmwareRuntime::start() {
+  RGBDTAM_RETURN_IF_ERROR(place_this_thread(board_.tracker, "rgbdtam-tracker"));
   RGBDTAM_RETURN_IF_ERROR(slam_.start(board_.mapper));
   RGBDTAM_RETURN_IF_ERROR(link_.start(board_.link));
   started_ = true;

@@ -72,91 +72,82 @@ const MessageSpec* find_spec(uint32_t id) {
   return nullptr;
 }
 
-// Wire order: fields sorted by type size (stable), then the extensions as declared.
+// Each message's fields in wire order, written once for packing and unpacking: sorted by type
+// size (stable), then the extensions as declared.
+template <typename M, typename F>
+void heartbeat_fields(M& m, F&& f) {
+  f(m.custom_mode);
+  f(m.type);
+  f(m.autopilot);
+  f(m.base_mode);
+  f(m.system_status);
+  f(m.mavlink_version);
+}
+
+template <typename M, typename F>
+void status_text_fields(M& m, F&& f) {
+  f(m.severity);
+  f(m.text);
+  f(m.id);
+  f(m.chunk_seq);
+}
+
+template <typename M, typename F>
+void odometry_fields(M& m, F&& f) {
+  f(m.time_usec);
+  f(m.x);
+  f(m.y);
+  f(m.z);
+  f(m.q);
+  f(m.vx);
+  f(m.vy);
+  f(m.vz);
+  f(m.rollspeed);
+  f(m.pitchspeed);
+  f(m.yawspeed);
+  f(m.pose_covariance);
+  f(m.velocity_covariance);
+  f(m.frame_id);
+  f(m.child_frame_id);
+  f(m.reset_counter);
+  f(m.estimator_type);
+  f(m.quality);
+}
+
 int pack(const Heartbeat& m, uint8_t* payload) {
   Writer w(payload);
-  w.put(m.custom_mode);
-  w.put(m.type);
-  w.put(m.autopilot);
-  w.put(m.base_mode);
-  w.put(m.system_status);
-  w.put(m.mavlink_version);
+  heartbeat_fields(m, [&](const auto& v) { w.put(v); });
   return w.size();
 }
 
 int pack(const StatusText& m, uint8_t* payload) {
   Writer w(payload);
-  w.put(m.severity);
-  w.put(m.text);
-  w.put(m.id);
-  w.put(m.chunk_seq);
+  status_text_fields(m, [&](const auto& v) { w.put(v); });
   return w.size();
 }
 
 int pack(const Odometry& m, uint8_t* payload) {
   Writer w(payload);
-  w.put(m.time_usec);
-  w.put(m.x);
-  w.put(m.y);
-  w.put(m.z);
-  w.put(m.q);
-  w.put(m.vx);
-  w.put(m.vy);
-  w.put(m.vz);
-  w.put(m.rollspeed);
-  w.put(m.pitchspeed);
-  w.put(m.yawspeed);
-  w.put(m.pose_covariance);
-  w.put(m.velocity_covariance);
-  w.put(m.frame_id);
-  w.put(m.child_frame_id);
-  w.put(m.reset_counter);
-  w.put(m.estimator_type);
-  w.put(m.quality);
+  odometry_fields(m, [&](const auto& v) { w.put(v); });
   return w.size();
 }
 
 void unpack(const uint8_t* payload, int length, Heartbeat* m) {
   uint8_t scratch[kMaxPayloadBytes];
   Reader r(padded(payload, length, kHeartbeat.payload_bytes, scratch));
-  r.get(&m->custom_mode);
-  r.get(&m->type);
-  r.get(&m->autopilot);
-  r.get(&m->base_mode);
-  r.get(&m->system_status);
-  r.get(&m->mavlink_version);
+  heartbeat_fields(*m, [&](auto& v) { r.get(&v); });
 }
 
 void unpack(const uint8_t* payload, int length, StatusText* m) {
   uint8_t scratch[kMaxPayloadBytes];
   Reader r(padded(payload, length, kStatusText.payload_bytes, scratch));
-  r.get(&m->severity);
-  r.get(&m->text);
-  r.get(&m->id);
-  r.get(&m->chunk_seq);
+  status_text_fields(*m, [&](auto& v) { r.get(&v); });
 }
 
 void unpack(const uint8_t* payload, int length, Odometry* m) {
   uint8_t scratch[kMaxPayloadBytes];
   Reader r(padded(payload, length, kOdometry.payload_bytes, scratch));
-  r.get(&m->time_usec);
-  r.get(&m->x);
-  r.get(&m->y);
-  r.get(&m->z);
-  r.get(&m->q);
-  r.get(&m->vx);
-  r.get(&m->vy);
-  r.get(&m->vz);
-  r.get(&m->rollspeed);
-  r.get(&m->pitchspeed);
-  r.get(&m->yawspeed);
-  r.get(&m->pose_covariance);
-  r.get(&m->velocity_covariance);
-  r.get(&m->frame_id);
-  r.get(&m->child_frame_id);
-  r.get(&m->reset_counter);
-  r.get(&m->estimator_type);
-  r.get(&m->quality);
+  odometry_fields(*m, [&](auto& v) { r.get(&v); });
 }
 
 int Encoder::frame(const MessageSpec& spec, const uint8_t* payload, int length, uint8_t* out) {

@@ -7,8 +7,8 @@
 
 namespace rgbdtam {
 
-Status place_thread(std::thread& t, const ThreadPlacement& p, const char* name) {
-  const pthread_t handle = t.native_handle();
+namespace {
+Status place(pthread_t handle, const ThreadPlacement& p, const char* name) {
   char short_name[16];  // the kernel keeps 15 characters
   std::strncpy(short_name, name, sizeof(short_name) - 1);
   short_name[sizeof(short_name) - 1] = '\0';
@@ -35,6 +35,15 @@ Status place_thread(std::thread& t, const ThreadPlacement& p, const char* name) 
     }
   }
   return Status::ok();
+}
+}  // namespace
+
+Status place_thread(std::thread& t, const ThreadPlacement& p, const char* name) {
+  return place(t.native_handle(), p, name);
+}
+
+Status place_this_thread(const ThreadPlacement& p, const char* name) {
+  return place(pthread_self(), p, name);
 }
 
 }  // namespace rgbdtam

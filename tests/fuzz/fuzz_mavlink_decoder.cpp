@@ -38,16 +38,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size == 0) return 0;
   const size_t chunk = 1 + data[0] % 64;
   Decoder dec;
-  Frame f;
   for (size_t at = 1; at < size;) {
     const size_t n = chunk < size - at ? chunk : size - at;
-    size_t used = 0;
-    for (;;) {
-      bool got = false;
-      used += dec.feed(data + at + used, n - used, &f, &got);
-      if (!got) break;
-      check_round_trip(f);
-    }
+    dec.feed_all(data + at, n, check_round_trip);
     at += n;
   }
   return 0;

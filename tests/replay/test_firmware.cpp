@@ -37,11 +37,7 @@ struct Monitor {
   void drain(const SE3& T_b_c) {
     uint8_t buf[2048];
     for (size_t n; (n = udp.receive(buf, sizeof(buf))) > 0;) {
-      mavlink::Frame f;
-      size_t used = 0;
-      for (bool got = true; got;) {
-        used += decoder.feed(buf + used, n - used, &f, &got);
-        if (!got) break;
+      decoder.feed_all(buf, n, [&](const mavlink::Frame& f) {
         if (f.message_id == mavlink::kOdometry.id) {
           mavlink::Odometry o;
           mavlink::unpack(f.payload, f.length, &o);
@@ -58,7 +54,7 @@ struct Monitor {
           mavlink::unpack(f.payload, f.length, &t);
           texts.emplace_back(t.text, strnlen(t.text, sizeof(t.text)));
         }
-      }
+      });
     }
   }
 };
@@ -185,13 +181,10 @@ TEST(Firmware, HostEmulationOverASerialPortAt115200CarriesEveryPose) {
   reader.join();
   ::close(master);
   ::close(slave);
-  mavlink::Frame f;
-  size_t used = 0;
   int odometry = 0;
-  for (bool got = true; got;) {
-    used += monitor.decoder.feed(bytes.data() + used, bytes.size() - used, &f, &got);
-    odometry += got && f.message_id == mavlink::kOdometry.id;
-  }
+  monitor.decoder.feed_all(bytes.data(), bytes.size(), [&](const mavlink::Frame& f) {
+    odometry += f.message_id == mavlink::kOdometry.id ? 1 : 0;
+  });
   const FirmwareCounters& c = job.runtime().counters();
   EXPECT_EQ(odometry, static_cast<int>(c.frames));
   EXPECT_EQ(job.runtime().link().counters().odometry_rate_limited, 0u);

@@ -188,16 +188,9 @@ TEST(Mavlink, HeartbeatAndStatusTextRoundTrip) {
 // Decodes a whole stream; returns the good frames' sequence numbers.
 std::vector<int> decode_all(Decoder* dec, const std::vector<uint8_t>& bytes, size_t chunk) {
   std::vector<int> seqs;
-  Frame f;
   for (size_t at = 0; at < bytes.size();) {
     const size_t n = std::min(chunk, bytes.size() - at);
-    size_t used = 0;
-    for (;;) {
-      bool got = false;
-      used += dec->feed(bytes.data() + at + used, n - used, &f, &got);
-      if (!got) break;
-      seqs.push_back(f.sequence);
-    }
+    dec->feed_all(bytes.data() + at, n, [&](const Frame& f) { seqs.push_back(f.sequence); });
     at += n;
   }
   return seqs;

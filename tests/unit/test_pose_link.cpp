@@ -80,12 +80,7 @@ struct Received {
   std::vector<mavlink::Odometry> odometry;
   int heartbeats = 0, status_texts = 0;
   void take(const uint8_t* bytes, size_t n) {
-    mavlink::Frame f;
-    size_t used = 0;
-    for (;;) {
-      bool got = false;
-      used += decoder.feed(bytes + used, n - used, &f, &got);
-      if (!got) return;
+    decoder.feed_all(bytes, n, [this](const mavlink::Frame& f) {
       if (f.message_id == mavlink::kOdometry.id) {
         odometry.emplace_back();
         mavlink::unpack(f.payload, f.length, &odometry.back());
@@ -94,7 +89,7 @@ struct Received {
       } else if (f.message_id == mavlink::kStatusText.id) {
         ++status_texts;
       }
-    }
+    });
   }
 };
 

@@ -97,19 +97,14 @@ int monitor(int argc, char** argv) {
     } else {
       last_rx_ns = now;
     }
-    mavlink::Frame f;
-    size_t used = 0;
-    for (;;) {
-      bool got = false;
-      used += decoder.feed(buf + used, n - used, &f, &got);
-      if (!got) break;
+    decoder.feed_all(buf, n, [&](const mavlink::Frame& f) {
       if (f.message_id == mavlink::kOdometry.id) {
         mavlink::unpack(f.payload, f.length, &st.last);
         ++st.odometry;
         ++st.window_count;
         if (st.last.quality < 0) {
           ++st.lost;
-          continue;
+          return;
         }
         ++st.valid;
         if (save != nullptr) {
@@ -129,10 +124,11 @@ int monitor(int argc, char** argv) {
         mavlink::unpack(f.payload, f.length, &t);
         std::memcpy(st.last_text, t.text, sizeof(t.text));
         ++st.status_texts;
-        if (!quiet)
+        if (!quiet) {
           std::fprintf(stderr, "\nSTATUSTEXT (severity %u): %s\n", t.severity, st.last_text);
+        }
       }
-    }
+    });
     if (now - st.window_start_ns >= 1'000'000'000) {
       st.rate_hz = st.window_count / ((now - st.window_start_ns) * 1e-9);
       st.window_start_ns = now;

@@ -36,7 +36,7 @@ struct Board {
   int gpio_led_line = -1;           // status LED, -1 = none
   int gpio_trigger_line = -1;       // frame trigger output to the sensor, -1 = none
 
-  ThreadPlacement tracker, mapper, link;
+  ThreadPlacement tracker, mapper, link, sensor;
 
   // Capacity overrides on the params (0 = keep the params file's value).
   int keyframe_pool = 0;

@@ -34,7 +34,8 @@ class FirmwareRuntime {
   // Allocates everything. The mapper always runs on its own thread here.
   Status init(const Params& params, const Board& board, ByteLink* link, GpioOutputs* gpio,
               ClockFn clock);
-  // Starts the mapper and link threads with the board's placement.
+  // Places the calling thread as the tracker and starts the mapper and link threads, as the
+  // board says. on_frame() must then be called from this same thread.
   Status start();
   // The tracker task for one frame the sensor delivered at arrival_ns.
   PoseEstimate on_frame(const SensorFrame& frame, int64_t arrival_ns);

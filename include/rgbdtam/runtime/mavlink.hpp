@@ -141,6 +141,17 @@ class Decoder {
   // Consumes bytes until a frame completes; returns the bytes consumed and sets *got when
   // *frame holds a good frame. Call again with the rest.
   size_t feed(const uint8_t* bytes, size_t n, Frame* frame, bool* got);
+  // Feeds all n bytes, calling on_frame(const Frame&) for every good frame they complete.
+  template <typename OnFrame>
+  void feed_all(const uint8_t* bytes, size_t n, OnFrame&& on_frame) {
+    Frame frame;
+    for (size_t used = 0;;) {
+      bool got = false;
+      used += feed(bytes + used, n - used, &frame, &got);
+      if (!got) return;
+      on_frame(static_cast<const Frame&>(frame));
+    }
+  }
   const DecoderCounters& counters() const { return counters_; }
 
  private:

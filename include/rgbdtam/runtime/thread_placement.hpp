@@ -16,5 +16,7 @@ struct ThreadPlacement {
 
 // Names the thread (for top/gdb) and applies the placement.
 Status place_thread(std::thread& t, const ThreadPlacement& p, const char* name);
+// The same for the calling thread (the tracker runs on the thread that calls the runtime).
+Status place_this_thread(const ThreadPlacement& p, const char* name);
 
 }  // namespace rgbdtam

@@ -1,0 +1,59 @@
+#pragma once
+// A recorded sequence delivered as a live sensor delivers frames: on its own thread, each frame
+// decoded and published no earlier than its recorded time after the first, whether or not the
+// tracker is ready. The tracker takes the newest published frame; a frame it did not take in
+// time is overwritten (newest kept) and counted as dropped, as is a frame the sensor thread
+// could not decode before the next one was due.
+//
+// Three frame slots rotate: the sensor thread fills one, one holds the newest published frame,
+// the tracker reads the third; a swap under a mutex is all either side ever waits for.
+
+#include <atomic>
+#include <condition_variable>
+#include <mutex>
+#include <thread>
+
+#include "rgbdtam/core/image.hpp"
+#include "rgbdtam/hal/tum_replay_source.hpp"
+#include "rgbdtam/runtime/thread_placement.hpp"
+
+namespace rgbdtam {
+
+class ReplaySensor : public SensorSource {
+ public:
+  ~ReplaySensor() override;
+  // Init time: allocates the slots for the source's frames (width x height).
+  void open(TumReplaySource* source, int width, int height);
+  Status start(const ThreadPlacement& placement);
+  // Waits for a frame newer than the last one taken; kEndOfStream after the last.
+  Status next(SensorFrame* frame, Status* warning) override;
+  // When the frame last returned by next() was published by the sensor.
+  int64_t arrival_ns() const { return slots_[front_].arrival_ns; }
+  uint32_t dropped() const { return dropped_.load(std::memory_order_relaxed); }
+  void stop();
+
+ private:
+  struct Slot {
+    ImageU8 gray;
+    ImageU16 depth;
+    SensorFrame frame;
+    Status status;
+    Status warning;
+    int64_t arrival_ns = 0;
+  };
+  void run();
+  void publish();
+
+  TumReplaySource* source_ = nullptr;
+  Slot slots_[3];
+  int back_ = 0, middle_ = 1, front_ = 2;
+  bool fresh_ = false;  // middle_ holds a frame the tracker has not taken
+  bool ended_ = false;
+  std::mutex mutex_;
+  std::condition_variable published_;
+  std::atomic<bool> stopping_{false};
+  std::atomic<uint32_t> dropped_{0};
+  std::thread thread_;
+};
+
+}  // namespace rgbdtam

@@ -1,0 +1,103 @@
+#include "rgbdtam/hal/replay_sensor.hpp"
+
+#include <errno.h>
+#include <time.h>
+
+#include <cstring>
+
+#include "rgbdtam/hal/clock.hpp"
+
+namespace rgbdtam {
+namespace {
+void sleep_until_ns(int64_t t_ns) {
+  timespec ts;
+  ts.tv_sec = static_cast<time_t>(t_ns / 1000000000);
+  ts.tv_nsec = static_cast<long>(t_ns % 1000000000);
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+  }
+}
+}  // namespace
+
+ReplaySensor::~ReplaySensor() { stop(); }
+
+void ReplaySensor::open(TumReplaySource* source, int width, int height) {
+  source_ = source;
+  for (Slot& s : slots_) {
+    s.gray.allocate(width, height);
+    s.depth.allocate(width, height);
+  }
+}
+
+Status ReplaySensor::start(const ThreadPlacement& placement) {
+  thread_ = std::thread([this] { run(); });
+  return place_thread(thread_, placement, "rgbdtam-sensor");
+}
+
+void ReplaySensor::stop() {
+  stopping_.store(true);
+  published_.notify_all();
+  if (thread_.joinable()) thread_.join();
+}
+
+void ReplaySensor::publish() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    std::swap(back_, middle_);
+    if (fresh_) dropped_.fetch_add(1, std::memory_order_relaxed);
+    fresh_ = true;
+  }
+  published_.notify_one();
+}
+
+void ReplaySensor::run() {
+  const int n = source_->frame_count();
+  const TumListEntry* stamps = source_->rgb_list().entries.get();
+  const int64_t start_ns = monotonic_ns();
+  const int64_t first_stamp_ns = n > 0 ? stamps[0].timestamp_ns : 0;
+  auto due_ns = [&](int i) { return start_ns + (stamps[i].timestamp_ns - first_stamp_ns); };
+  while (!stopping_.load() && source_->position() < n) {
+    // A frame already overtaken by a newer one is never decoded.
+    const int now_index = source_->position();
+    int newest = now_index;
+    const int64_t now = monotonic_ns();
+    while (newest + 1 < n && due_ns(newest + 1) <= now) ++newest;
+    dropped_.fetch_add(static_cast<uint32_t>(newest - now_index), std::memory_order_relaxed);
+    source_->skip_to(newest);
+    sleep_until_ns(due_ns(newest));
+    Slot& s = slots_[back_];
+    SensorFrame f;
+    s.status = source_->next(&f, &s.warning);
+    if (s.status.is_ok()) {
+      const size_t pixels = static_cast<size_t>(f.width_px) * static_cast<size_t>(f.height_px);
+      std::memcpy(s.gray.data(), f.gray, pixels);
+      if (f.depth != nullptr) std::memcpy(s.depth.data(), f.depth, pixels * sizeof(uint16_t));
+      s.frame = f;
+      s.frame.gray = s.gray.data();
+      s.frame.depth = f.depth != nullptr ? s.depth.data() : nullptr;
+    }
+    s.arrival_ns = monotonic_ns();
+    publish();
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ended_ = true;
+  }
+  published_.notify_one();
+}
+
+Status ReplaySensor::next(SensorFrame* frame, Status* warning) {
+  {
+    std::unique_lock<std::mutex> lock(mutex_);
+    published_.wait(lock, [this] { return fresh_ || ended_ || stopping_.load(); });
+    if (!fresh_) return Status::error(StatusCode::kEndOfStream, "end of sequence");
+    std::swap(front_, middle_);
+    fresh_ = false;
+  }
+  const Slot& s = slots_[front_];
+  *warning = s.warning;
+  if (!s.status.is_ok()) return s.status;
+  *frame = s.frame;
+  return Status::ok();
+}
+
+}  // namespace rgbdtam
