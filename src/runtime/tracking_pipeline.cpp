@@ -149,7 +149,17 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
   out.residuals_used = r.residuals_used;
   out.iterations = r.iterations;
   out.information = r.information;
-  if (r.state == TrackingState::kOk) {
+  const bool sigma_jumped =
+      typical_photometric_sigma_ > 0.f && r.photometric_sigma > 0.0 &&
+      r.photometric_sigma > params_.lost_sigma_ratio * typical_photometric_sigma_;
+  if (r.state == TrackingState::kOk && !sigma_jumped) {
+    if (r.photometric_sigma > 0.0) {
+      // A slow average: right after a new keyframe the scale is briefly tiny.
+      const float sigma = static_cast<float>(r.photometric_sigma);
+      typical_photometric_sigma_ = typical_photometric_sigma_ == 0.f
+                                       ? sigma
+                                       : 0.95f * typical_photometric_sigma_ + 0.05f * sigma;
+    }
     out.T_w_c = reference_->T_w_k * r.T_k_c;
     out.flags |= kPoseValid;
     ++counters_.tracked;

@@ -141,6 +141,70 @@ TEST(Firmware, SensorErrorsReachTheOperatorAsStatusTextAndAFaultBlink) {
   EXPECT_EQ(monitor.odometry, static_cast<int>(c.frames));
 }
 
+// A transport that keeps what it is given (the link thread writes, the test reads after stop).
+class CaptureLink : public ByteLink {
+ public:
+  bool send(const uint8_t* bytes, size_t n) override {
+    bytes_.insert(bytes_.end(), bytes, bytes + n);
+    ++counters_.tx_frames;
+    return true;
+  }
+  size_t receive(uint8_t*, size_t) override { return 0; }
+  const std::vector<uint8_t>& bytes() const { return bytes_; }
+
+ private:
+  std::vector<uint8_t> bytes_;
+};
+
+TEST(Firmware, TrackingLostAndRegainedAreReportedOnceEach) {
+  testing::SyntheticScene scene = testing::SyntheticScene::half_resolution();
+  Params params;
+  ASSERT_TRUE(parse_params(testing::synthetic_config(scene).c_str(), "synthetic", &params).is_ok());
+  params.sensor.disparity_sigma_px = 0.1;
+  Board board;
+  ASSERT_TRUE(parse_board("board.name = test\nbuild.preset = host-release\nboard.cpu_count = 1\n"
+                          "sensor.kind = replay\nsensor.device = x\nsensor.config = y\n"
+                          "link.kind = udp\nlink.udp_remote = 127.0.0.1:9\n",
+                          "test", ".", &board)
+                  .is_ok());
+  CaptureLink link;
+  FakeGpio gpio;
+  FirmwareRuntime runtime;
+  ASSERT_TRUE(runtime.init(params, board, &link, &gpio, [] { return int64_t{0}; }).is_ok());
+  ASSERT_TRUE(runtime.start().is_ok());
+  const auto& frames = scene.render_path(20, 10.0);
+  const std::vector<uint8_t> black(frames[0].gray.size(), 0);
+  for (int i = 0; i < 20; ++i) {
+    SensorFrame f = frames[static_cast<size_t>(i)].as_sensor_frame(scene.camera, i, 10.0);
+    if (i >= 8 && i < 12) {  // the lens covered: nothing to track, no depth
+      f.gray = black.data();
+      f.depth = nullptr;
+    }
+    (void)runtime.on_frame(f, 0);
+  }
+  runtime.stop();
+  std::vector<std::string> texts;
+  int odometry = 0, lost = 0;
+  mavlink::Decoder decoder;
+  decoder.feed_all(link.bytes().data(), link.bytes().size(), [&](const mavlink::Frame& f) {
+    if (f.message_id == mavlink::kStatusText.id) {
+      mavlink::StatusText t;
+      mavlink::unpack(f.payload, f.length, &t);
+      texts.emplace_back(t.text, strnlen(t.text, sizeof(t.text)));
+    } else if (f.message_id == mavlink::kOdometry.id) {
+      mavlink::Odometry o;
+      mavlink::unpack(f.payload, f.length, &o);
+      ++odometry;
+      lost += o.quality < 0 ? 1 : 0;
+    }
+  });
+  EXPECT_EQ(odometry, 20);
+  EXPECT_EQ(lost, static_cast<int>(runtime.counters().lost));
+  EXPECT_GE(lost, 1);
+  EXPECT_EQ(texts,
+            (std::vector<std::string>{"rgbdtam: tracking lost", "rgbdtam: tracking regained"}));
+}
+
 TEST(Firmware, HostEmulationOverASerialPortAt115200CarriesEveryPose) {
   // The link on a pseudo-terminal as the robot's UART; this test reads the other end.
   int master = -1, slave = -1;

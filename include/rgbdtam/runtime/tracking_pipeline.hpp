@@ -63,6 +63,7 @@ class TrackingPipeline {
   SE3 T_w_last_, T_w_before_last_;
   int valid_history_ = 0;
   int consecutive_lost_ = 0;
+  float typical_photometric_sigma_ = 0.f;  // slow average over tracked frames; 0 = none yet
   uint32_t reset_counter_ = 0;
   TrackingCounters counters_;
 };
