@@ -66,15 +66,22 @@ void ReplaySensor::run() {
     sleep_until_ns(due_ns(newest));
     Slot& s = slots_[back_];
     SensorFrame f;
-    s.status = source_->next(&f, &s.warning);
-    if (s.status.is_ok()) {
-      const size_t pixels = static_cast<size_t>(f.width_px) * static_cast<size_t>(f.height_px);
-      std::memcpy(s.gray.data(), f.gray, pixels);
-      if (f.depth != nullptr) std::memcpy(s.depth.data(), f.depth, pixels * sizeof(uint16_t));
-      s.frame = f;
-      s.frame.gray = s.gray.data();
-      s.frame.depth = f.depth != nullptr ? s.depth.data() : nullptr;
+    const Status status = source_->next(&f, &s.warning);
+    if (!status.is_ok()) {
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        error_ = status;
+        ++errors_pending_;
+      }
+      published_.notify_one();
+      continue;
     }
+    const size_t pixels = static_cast<size_t>(f.width_px) * static_cast<size_t>(f.height_px);
+    std::memcpy(s.gray.data(), f.gray, pixels);
+    if (f.depth != nullptr) std::memcpy(s.depth.data(), f.depth, pixels * sizeof(uint16_t));
+    s.frame = f;
+    s.frame.gray = s.gray.data();
+    s.frame.depth = f.depth != nullptr ? s.depth.data() : nullptr;
     s.arrival_ns = monotonic_ns();
     publish();
   }
@@ -88,14 +95,18 @@ void ReplaySensor::run() {
 Status ReplaySensor::next(SensorFrame* frame, Status* warning) {
   {
     std::unique_lock<std::mutex> lock(mutex_);
-    published_.wait(lock, [this] { return fresh_ || ended_ || stopping_.load(); });
+    published_.wait(lock,
+                    [this] { return fresh_ || errors_pending_ > 0 || ended_ || stopping_.load(); });
+    if (errors_pending_ > 0) {
+      --errors_pending_;
+      return error_;
+    }
     if (!fresh_) return Status::error(StatusCode::kEndOfStream, "end of sequence");
     std::swap(front_, middle_);
     fresh_ = false;
   }
   const Slot& s = slots_[front_];
   *warning = s.warning;
-  if (!s.status.is_ok()) return s.status;
   *frame = s.frame;
   return Status::ok();
 }

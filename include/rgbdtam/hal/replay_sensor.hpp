@@ -6,7 +6,8 @@
 // could not decode before the next one was due.
 //
 // Three frame slots rotate: the sensor thread fills one, one holds the newest published frame,
-// the tracker reads the third; a swap under a mutex is all either side ever waits for.
+// the tracker reads the third; a swap under a mutex is all either side ever waits for. A frame
+// that cannot be decoded is reported by next() as an error, never dropped silently.
 
 #include <atomic>
 #include <condition_variable>
@@ -37,7 +38,6 @@ class ReplaySensor : public SensorSource {
     ImageU8 gray;
     ImageU16 depth;
     SensorFrame frame;
-    Status status;
     Status warning;
     int64_t arrival_ns = 0;
   };
@@ -49,6 +49,10 @@ class ReplaySensor : public SensorSource {
   int back_ = 0, middle_ = 1, front_ = 2;
   bool fresh_ = false;  // middle_ holds a frame the tracker has not taken
   bool ended_ = false;
+  // Frames that could not be delivered are never overwritten like frames: each one is
+  // reported by its own next() call (with the latest message).
+  int errors_pending_ = 0;
+  Status error_;
   std::mutex mutex_;
   std::condition_variable published_;
   std::atomic<bool> stopping_{false};
