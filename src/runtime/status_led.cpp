@@ -20,6 +20,7 @@ bool led_is_on(LedState state, int64_t now_ns) {
 
 void StatusLed::update(LedState state, int64_t now_ns) {
   if (gpio_ == nullptr || line_ < 0) return;
+  ++updates_[static_cast<int>(state)];
   const bool on = led_is_on(state, now_ns);
   if (written_ && on == on_) return;
   gpio_->set(line_, on);

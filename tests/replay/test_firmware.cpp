@@ -137,7 +137,7 @@ TEST(Firmware, SensorErrorsReachTheOperatorAsStatusTextAndAFaultBlink) {
   bool reported = false;
   for (const std::string& t : monitor.texts) reported |= t.rfind("sensor: ", 0) == 0;
   EXPECT_TRUE(reported) << "no STATUSTEXT for the sensor error";
-  EXPECT_GT(job.runtime().led().transitions(), 0u) << "the LED must blink a fault";
+  EXPECT_GT(job.runtime().led().updates_in(LedState::kFault), 0u) << "the LED must show a fault";
   EXPECT_EQ(monitor.odometry, static_cast<int>(c.frames));
 }
 

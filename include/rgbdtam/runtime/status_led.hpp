@@ -16,7 +16,7 @@ class GpioOutputs {
 
 // What the LED shows, most severe first.
 enum class LedState : uint8_t {
-  kFault,         // sensor or link failure: double flash every second
+  kFault,         // a sensor error in the last 2 s: double flash every second
   kLost,          // tracking lost: 5 Hz blink
   kInitialising,  // no keyframe yet: 1 Hz blink
   kTracking,      // steady on
@@ -34,6 +34,9 @@ class StatusLed {
   }
   void update(LedState state, int64_t now_ns);
   uint32_t transitions() const { return transitions_; }
+  // How many updates showed this state (what an operator could have seen, whatever the blink
+  // phase at those moments).
+  uint32_t updates_in(LedState state) const { return updates_[static_cast<int>(state)]; }
 
  private:
   GpioOutputs* gpio_ = nullptr;
@@ -41,6 +44,7 @@ class StatusLed {
   bool on_ = false;
   bool written_ = false;
   uint32_t transitions_ = 0;
+  uint32_t updates_[4] = {};
 };
 
 }  // namespace rgbdtam
