@@ -95,7 +95,11 @@ TEST(Firmware, HostEmulationStreamsEveryPoseAndMatchesReplay) {
   EXPECT_EQ(gpio->rising_edges(job.board().gpio_trigger_line), c.frames);
   EXPECT_TRUE(gpio->level(job.board().gpio_led_line)) << "tracking: the LED is steady on";
 
-  // What the monitor received is what replay estimates, to float precision on the wire.
+  // What the monitor received is what replay estimates, to float precision on the wire. Only
+  // when the runtime kept up with every frame (under qemu or the sanitizers it cannot).
+  std::printf("clip over the link: %d ODOMETRY, %u deadline misses, %u dropped\n", monitor.odometry,
+              c.deadline_misses, job.sensor_dropped());
+  if (job.sensor_dropped() > 0) return;
   const std::string clip = testing::source_path("data/tum_fr1_xyz_clip");
   const auto replay = testing::replay_and_evaluate(
       clip, testing::source_path("config/tum_fr1.conf"), "map.threaded=true");
@@ -105,14 +109,9 @@ TEST(Firmware, HostEmulationStreamsEveryPoseAndMatchesReplay) {
   ASSERT_TRUE(read_tum_trajectory((clip + "/groundtruth.txt").c_str(), &gt, &bad).is_ok());
   const EvaluationReport received = evaluate_all(gt, monitor.poses, nullptr);
   ASSERT_TRUE(received.ate_ok);
-  std::printf(
-      "clip over the link: ATE %.3f cm (replay %.3f cm), %d ODOMETRY, %u deadline misses, "
-      "%u dropped\n",
-      received.ate.rmse_m * 100, replay.report.ate.rmse_m * 100, monitor.odometry,
-      c.deadline_misses, job.sensor_dropped());
-  if (job.sensor_dropped() == 0) {  // under qemu the emulated CPU cannot keep the cadence
-    EXPECT_NEAR(received.ate.rmse_m, replay.report.ate.rmse_m, 0.001);
-  }
+  std::printf("clip over the link: ATE %.3f cm (replay %.3f cm)\n", received.ate.rmse_m * 100,
+              replay.report.ate.rmse_m * 100);
+  EXPECT_NEAR(received.ate.rmse_m, replay.report.ate.rmse_m, 0.001);
 }
 
 TEST(Firmware, SensorErrorsReachTheOperatorAsStatusTextAndAFaultBlink) {
@@ -161,6 +160,7 @@ TEST(Firmware, TrackingLostAndRegainedAreReportedOnceEach) {
   Params params;
   ASSERT_TRUE(parse_params(testing::synthetic_config(scene).c_str(), "synthetic", &params).is_ok());
   params.sensor.disparity_sigma_px = 0.1;
+  params.map_enabled = false;  // tracking health is what this test is about
   Board board;
   ASSERT_TRUE(parse_board("board.name = test\nbuild.preset = host-release\nboard.cpu_count = 1\n"
                           "sensor.kind = replay\nsensor.device = x\nsensor.config = y\n"
