@@ -7,7 +7,6 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
-#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -39,27 +38,43 @@ struct XmlMessage {
 // CRC_EXTRA as the MAVLink generator defines it: the X.25 CRC over "NAME ", then, for each
 // base (non-extension) field in wire order, "type " and "name " and the array length, folded
 // to one byte.
+// The text of attribute `attr` in the tag starting at `from`, or "" (a small reader for the
+// generator's XML, enough for message and field tags).
+std::string attribute(const std::string& xml, size_t from, const std::string& attr) {
+  const size_t end = xml.find('>', from);
+  const size_t at = xml.find(" " + attr + "=\"", from);
+  if (at == std::string::npos || at > end) return "";
+  const size_t start = at + attr.size() + 3;
+  return xml.substr(start, xml.find('"', start) - start);
+}
+
 XmlMessage from_xml(const std::string& xml, const std::string& name) {
-  const std::regex message_re("<message id=\"\\d+\" name=\"" + name + "\">([\\s\\S]*?)</message>");
-  std::smatch m;
-  EXPECT_TRUE(std::regex_search(xml, m, message_re)) << name;
-  const std::string body = m[1];
-  const size_t extensions = body.find("<extensions/>");
-  const std::regex field_re("<field type=\"([a-z0-9_]+)(?:\\[(\\d+)\\])?\" name=\"([a-z0-9_]+)\"");
+  size_t message = xml.find("<message ");
+  while (message != std::string::npos && attribute(xml, message, "name") != name) {
+    message = xml.find("<message ", message + 1);
+  }
+  EXPECT_NE(message, std::string::npos) << name;
+  if (message == std::string::npos) return {};
+  const size_t body_end = xml.find("</message>", message);
+  const size_t extensions = xml.find("<extensions/>", message);
   std::vector<XmlField> base, all;
-  for (auto it = std::sregex_iterator(body.begin(), body.end(), field_re);
-       it != std::sregex_iterator(); ++it) {
+  for (size_t tag = xml.find("<field ", message); tag < body_end;
+       tag = xml.find("<field ", tag + 1)) {
     XmlField f;
-    f.type = (*it)[1];
+    f.type = attribute(xml, tag, "type");
+    f.name = attribute(xml, tag, "name");
+    const size_t bracket = f.type.find('[');
+    if (bracket != std::string::npos) {
+      f.array = std::stoi(f.type.substr(bracket + 1));
+      f.type = f.type.substr(0, bracket);
+    }
     if (f.type == "uint8_t_mavlink_version") f.type = "uint8_t";
-    f.array = (*it)[2].matched ? std::stoi((*it)[2]) : 0;
-    f.name = (*it)[3];
     f.type_bytes = f.type.find("64") != std::string::npos || f.type == "double"  ? 8
                    : f.type.find("32") != std::string::npos || f.type == "float" ? 4
                    : f.type.find("16") != std::string::npos                      ? 2
                                                                                  : 1;
     all.push_back(f);
-    if (static_cast<size_t>(it->position()) < extensions) base.push_back(f);
+    if (tag < extensions) base.push_back(f);
   }
   std::stable_sort(base.begin(), base.end(), [](const XmlField& a, const XmlField& b) {
     return a.type_bytes > b.type_bytes;
