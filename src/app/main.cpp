@@ -8,6 +8,7 @@
 #include <string>
 
 #include "evaluate_command.hpp"
+#include "record_job.hpp"
 #include "replay_job.hpp"
 #include "rgbdtam/hal/file.hpp"
 #include "rgbdtam/hal/ply_map_writer.hpp"
@@ -27,7 +28,9 @@ void usage() {
                "  rgbdtam eval <groundtruth.txt> <estimate.txt> [--json] [--frames rgb.txt]\n"
                "  rgbdtam params --config <file> [--set key=value]...\n"
                "  rgbdtam run --board <board-folder> [--board-set key=value]...\n"
-               "              [--set key=value]... [--max-frames N] [--quiet]\n");
+               "              [--set key=value]... [--max-frames N] [--quiet]\n"
+               "  rgbdtam record --board <board-folder> <out-dir> [--board-set key=value]...\n"
+               "                 [--max-frames N]\n");
 }
 
 // Shared by replay and params: --config and --set build the parameters.
@@ -178,33 +181,46 @@ int replay_command(int argc, char** argv) {
   return s.is_ok() ? 0 : 1;
 }
 
+// The job that Ctrl-C stops (request_stop is an atomic store: signal-safe).
 RunJob* g_running = nullptr;
+RecordJob* g_recording = nullptr;
 void on_signal(int) {
-  if (g_running != nullptr) g_running->request_stop();  // an atomic store: signal-safe
+  if (g_running != nullptr) g_running->request_stop();
+  if (g_recording != nullptr) g_recording->request_stop();
+}
+
+// Options shared by run and record; positional arguments are left to the caller (null when
+// there is none). False on an unknown argument.
+bool parse_run_options(int argc, char** argv, RunOptions* options, const char** positional,
+                       const char* verb) {
+  for (int i = 0; i < argc; ++i) {
+    const bool has_value = i + 1 < argc;
+    if (std::strcmp(argv[i], "--board") == 0 && has_value) {
+      options->board_dir = argv[++i];
+    } else if (std::strcmp(argv[i], "--board-set") == 0 && has_value &&
+               options->board_override_count < RunOptions::kMaxOverrides) {
+      options->board_overrides[options->board_override_count++] = argv[++i];
+    } else if (std::strcmp(argv[i], "--set") == 0 && has_value &&
+               options->param_override_count < RunOptions::kMaxOverrides) {
+      options->param_overrides[options->param_override_count++] = argv[++i];
+    } else if (std::strcmp(argv[i], "--max-frames") == 0 && has_value) {
+      options->max_frames = std::atoi(argv[++i]);
+    } else if (std::strcmp(argv[i], "--quiet") == 0) {
+      options->progress = false;
+    } else if (positional != nullptr && *positional == nullptr && argv[i][0] != '-') {
+      *positional = argv[i];
+    } else {
+      std::fprintf(stderr, "rgbdtam %s: unknown argument '%s'\n", verb, argv[i]);
+      usage();
+      return false;
+    }
+  }
+  return true;
 }
 
 int run_command(int argc, char** argv) {
   RunOptions options;
-  for (int i = 0; i < argc; ++i) {
-    const bool has_value = i + 1 < argc;
-    if (std::strcmp(argv[i], "--board") == 0 && has_value) {
-      options.board_dir = argv[++i];
-    } else if (std::strcmp(argv[i], "--board-set") == 0 && has_value &&
-               options.board_override_count < RunOptions::kMaxOverrides) {
-      options.board_overrides[options.board_override_count++] = argv[++i];
-    } else if (std::strcmp(argv[i], "--set") == 0 && has_value &&
-               options.param_override_count < RunOptions::kMaxOverrides) {
-      options.param_overrides[options.param_override_count++] = argv[++i];
-    } else if (std::strcmp(argv[i], "--max-frames") == 0 && has_value) {
-      options.max_frames = std::atoi(argv[++i]);
-    } else if (std::strcmp(argv[i], "--quiet") == 0) {
-      options.progress = false;
-    } else {
-      std::fprintf(stderr, "rgbdtam run: unknown argument '%s'\n", argv[i]);
-      usage();
-      return 2;
-    }
-  }
+  if (!parse_run_options(argc, argv, &options, nullptr, "run")) return 2;
   auto job = std::make_unique<RunJob>();
   Status s = job->init(options);
   if (s.is_ok()) s = job->start();
@@ -223,6 +239,36 @@ int run_command(int argc, char** argv) {
   return 0;
 }
 
+int record_command(int argc, char** argv) {
+  RunOptions options;
+  const char* out_dir = nullptr;
+  if (!parse_run_options(argc, argv, &options, &out_dir, "record")) return 2;
+  if (out_dir == nullptr) {
+    usage();
+    return 2;
+  }
+  auto job = std::make_unique<RecordJob>();
+  Status s = job->init(options, out_dir);
+  if (s.is_ok()) s = job->start();
+  if (!s.is_ok()) {
+    std::fprintf(stderr, "rgbdtam record: %s\n", s.message());
+    return 1;
+  }
+  g_recording = job.get();
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  while (job->step()) {
+  }
+  s = job->finish();
+  g_recording = nullptr;
+  job->print_summary();
+  if (!s.is_ok()) {
+    std::fprintf(stderr, "rgbdtam record: %s\n", s.message());
+    return 1;
+  }
+  return 0;
+}
+
 }  // namespace
 }  // namespace rgbdtam
 
@@ -236,6 +282,7 @@ int main(int argc, char** argv) {
   if (std::strcmp(verb, "eval") == 0) return rgbdtam::evaluate_command(argc - 2, argv + 2);
   if (std::strcmp(verb, "params") == 0) return rgbdtam::params_command(argc - 2, argv + 2);
   if (std::strcmp(verb, "run") == 0) return rgbdtam::run_command(argc - 2, argv + 2);
+  if (std::strcmp(verb, "record") == 0) return rgbdtam::record_command(argc - 2, argv + 2);
   if (std::strcmp(verb, "--help") == 0 || std::strcmp(verb, "help") == 0) {
     rgbdtam::usage();
     return 0;

@@ -31,32 +31,43 @@ Status load_board(const char* board_dir, Board* out) {
   return s;
 }
 
+Status load_board_and_params(const RunOptions& options, Board* board, Params* params) {
+  if (options.board_dir == nullptr) {
+    return Status::error(StatusCode::kInvalidArgument, "--board <folder> is required");
+  }
+  RGBDTAM_RETURN_IF_ERROR(load_board(options.board_dir, board));
+  for (int i = 0; i < options.board_override_count; ++i) {
+    RGBDTAM_RETURN_IF_ERROR(set_board_value(options.board_overrides[i], board));
+  }
+  RGBDTAM_RETURN_IF_ERROR(validate_board(*board));
+  RGBDTAM_RETURN_IF_ERROR(read_params(board->sensor_config, params));
+  for (int i = 0; i < options.param_override_count; ++i) {
+    RGBDTAM_RETURN_IF_ERROR(set_param(options.param_overrides[i], "--set", params));
+  }
+  return Status::ok();
+}
+
+Status open_board_sensor(const Board& board, const Params& params, TumReplaySource* replay,
+                         ReplaySensor* sensor) {
+  if (std::strcmp(board.sensor_kind, "replay") != 0) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "board '%s': sensor.kind '%s' has no backend in this build yet (the "
+                         "live sensor backends are the next issue); use a replay board",
+                         board.name, board.sensor_kind);
+  }
+  RGBDTAM_RETURN_IF_ERROR(replay->open(board.sensor_device, params.camera.width_px,
+                                       params.camera.height_px, params.sensor.max_rgb_depth_dt_ns,
+                                       params.sensor.depth_time_offset_ns));
+  sensor->open(replay, params.camera.width_px, params.camera.height_px);
+  return Status::ok();
+}
+
 RunJob::~RunJob() { finish(); }
 
 Status RunJob::init(const RunOptions& options) {
   options_ = options;
-  if (options.board_dir == nullptr) {
-    return Status::error(StatusCode::kInvalidArgument, "--board <folder> is required");
-  }
-  RGBDTAM_RETURN_IF_ERROR(load_board(options.board_dir, &board_));
-  for (int i = 0; i < options.board_override_count; ++i) {
-    RGBDTAM_RETURN_IF_ERROR(set_board_value(options.board_overrides[i], &board_));
-  }
-  RGBDTAM_RETURN_IF_ERROR(validate_board(board_));
-  RGBDTAM_RETURN_IF_ERROR(read_params(board_.sensor_config, &params_));
-  for (int i = 0; i < options.param_override_count; ++i) {
-    RGBDTAM_RETURN_IF_ERROR(set_param(options.param_overrides[i], "--set", &params_));
-  }
-  if (std::strcmp(board_.sensor_kind, "replay") != 0) {
-    return Status::error(StatusCode::kInvalidArgument,
-                         "board '%s': sensor.kind '%s' has no backend in this build yet (the "
-                         "live sensor backends are the next issue); use a replay board",
-                         board_.name, board_.sensor_kind);
-  }
-  RGBDTAM_RETURN_IF_ERROR(replay_.open(board_.sensor_device, params_.camera.width_px,
-                                       params_.camera.height_px, params_.sensor.max_rgb_depth_dt_ns,
-                                       params_.sensor.depth_time_offset_ns));
-  sensor_.open(&replay_, params_.camera.width_px, params_.camera.height_px);
+  RGBDTAM_RETURN_IF_ERROR(load_board_and_params(options, &board_, &params_));
+  RGBDTAM_RETURN_IF_ERROR(open_board_sensor(board_, params_, &replay_, &sensor_));
   if (std::strcmp(board_.link_kind, "udp") == 0) {
     char ip[64];
     uint16_t port = 0;

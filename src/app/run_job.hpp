@@ -25,6 +25,11 @@ struct RunOptions {
 
 // Reads board_dir/board.conf and validates it.
 Status load_board(const char* board_dir, Board* out);
+// The board with its overrides, validated, and its params file with theirs.
+Status load_board_and_params(const RunOptions& options, Board* board, Params* params);
+// The board's sensor source (replay only until the live backends exist).
+Status open_board_sensor(const Board& board, const Params& params, TumReplaySource* replay,
+                         ReplaySensor* sensor);
 
 class RunJob {
  public:

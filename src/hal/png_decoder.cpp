@@ -1,6 +1,6 @@
 #include "rgbdtam/hal/png_decoder.hpp"
 
-#include <png.h>
+#include "png_hooks.hpp"
 
 #include <csetjmp>
 #include <cstring>
@@ -14,18 +14,6 @@ struct MemoryReader {
   size_t pos;
 };
 
-struct ErrorSink {
-  char message[160];
-};
-
-void on_error(png_structp png, png_const_charp msg) {
-  auto* sink = static_cast<ErrorSink*>(png_get_error_ptr(png));
-  std::snprintf(sink->message, sizeof(sink->message), "%s", msg);
-  png_longjmp(png, 1);
-}
-
-void on_warning(png_structp, png_const_charp) {}
-
 void read_bytes(png_structp png, png_bytep out, size_t n) {
   auto* r = static_cast<MemoryReader*>(png_get_io_ptr(png));
   if (r->size - r->pos < n) png_error(png, "file is truncated");
@@ -33,30 +21,14 @@ void read_bytes(png_structp png, png_bytep out, size_t n) {
   r->pos += n;
 }
 
-png_voidp arena_malloc(png_structp png, png_alloc_size_t n) {
-  return static_cast<PngDecoder*>(png_get_mem_ptr(png))->arena_alloc(n);
-}
-
-void arena_free(png_structp, png_voidp) {}  // the arena is reset before each image
-
 constexpr size_t kArenaFixedBytes = 96 * 1024;  // png/info structs, zlib state and window
 }  // namespace
 
 void PngDecoder::allocate(int max_width) {
   max_width_ = max_width;
   // libpng keeps two rows of up to 4 channels x 16 bits, plus its fixed state.
-  arena_size_ = kArenaFixedBytes + 4 * (static_cast<size_t>(max_width) * 8 + 64);
-  arena_.reset(new uint8_t[arena_size_]);
+  arena_.allocate(kArenaFixedBytes + 4 * (static_cast<size_t>(max_width) * 8 + 64));
   row_.reset(new uint8_t[static_cast<size_t>(max_width) * 8]);
-}
-
-void* PngDecoder::arena_alloc(size_t n) {
-  const size_t aligned = (n + 15) & ~static_cast<size_t>(15);
-  if (arena_size_ - arena_used_ < aligned) return nullptr;  // libpng reports out of memory
-  void* p = arena_.get() + arena_used_;
-  arena_used_ += aligned;
-  if (arena_used_ > high_water_) high_water_ = arena_used_;
-  return p;
 }
 
 Status PngDecoder::decode_gray8(const uint8_t* png, size_t size, int width, int height,
@@ -74,11 +46,12 @@ Status PngDecoder::decode(const uint8_t* data, size_t size, int width, int heigh
   if (size < 8 || png_sig_cmp(data, 0, 8) != 0) {
     return Status::error(StatusCode::kCorrupt, "not a PNG file");
   }
-  arena_used_ = 0;
-  ErrorSink sink{};
+  arena_.reset();
+  png_hooks::ErrorSink sink{};
   MemoryReader reader{data, size, 0};
-  png_structp png = png_create_read_struct_2(PNG_LIBPNG_VER_STRING, &sink, on_error, on_warning,
-                                             this, arena_malloc, arena_free);
+  png_structp png = png_create_read_struct_2(PNG_LIBPNG_VER_STRING, &sink, png_hooks::on_error,
+                                             png_hooks::on_warning, &arena_,
+                                             png_hooks::arena_malloc, png_hooks::arena_free);
   if (png == nullptr) return Status::error(StatusCode::kOutOfRange, "PNG arena too small");
   png_infop info = png_create_info_struct(png);
   if (info == nullptr) return Status::error(StatusCode::kOutOfRange, "PNG arena too small");

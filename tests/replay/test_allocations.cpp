@@ -9,6 +9,7 @@
 #include <initializer_list>
 #include <new>
 
+#include "record_job.hpp"
 #include "replay_job.hpp"
 #include "rgbdtam/hal/file.hpp"
 #include "rgbdtam/hal/udp_link.hpp"
@@ -175,6 +176,29 @@ TEST(Allocations, NoneInTheFirmwareRuntimeAcrossItsThreads) {
       c.frames, job.runtime().slam().mapper().counters().keyframes_mapped,
       static_cast<unsigned long long>(job.runtime().link().counters().odometry_sent),
       g_calls.load());
+}
+
+TEST(Allocations, NoneWhileRecordingAfterInit) {
+  const std::string out = testing::make_temp_dir("alloc_record") + "/recording";
+  const std::string board = testing::source_path("board/host-emulation");
+  RunOptions options;
+  options.board_dir = board.c_str();
+  options.progress = false;
+  RecordJob job;
+  ASSERT_TRUE(job.init(options, out.c_str()).is_ok());
+  ASSERT_TRUE(job.start().is_ok());
+  g_calls = 0;
+  g_bytes = 0;
+  g_armed = true;
+  while (job.step()) {
+  }
+  const Status s = job.finish();
+  g_armed = false;
+  ASSERT_TRUE(s.is_ok()) << s.message();
+  EXPECT_GT(job.recorder().counters().written, 0u);
+  EXPECT_EQ(g_calls.load(), 0) << g_bytes.load() << " bytes allocated after init";
+  std::printf("recorder: %u frames written, %ld allocations after init\n",
+              job.recorder().counters().written, g_calls.load());
 }
 
 }  // namespace

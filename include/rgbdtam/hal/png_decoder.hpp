@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "rgbdtam/core/status.hpp"
+#include "rgbdtam/hal/png_arena.hpp"
 
 namespace rgbdtam {
 
@@ -19,18 +20,12 @@ class PngDecoder {
   // 16-bit single channel (depth).
   Status decode_gray16(const uint8_t* png, size_t size, int width, int height, uint16_t* out);
 
-  size_t arena_high_water() const { return high_water_; }
-
-  // libpng's allocator hooks; public only so the C callbacks can reach them.
-  void* arena_alloc(size_t n);
+  size_t arena_high_water() const { return arena_.high_water(); }
 
  private:
   Status decode(const uint8_t* png, size_t size, int width, int height, int bit_depth, void* out);
-  std::unique_ptr<uint8_t[]> arena_;
+  PngArena arena_;
   std::unique_ptr<uint8_t[]> row_;
-  size_t arena_size_ = 0;
-  size_t arena_used_ = 0;
-  size_t high_water_ = 0;
   int max_width_ = 0;
 };
 

@@ -1,0 +1,73 @@
+#pragma once
+// Records what a sensor delivers as a TUM RGB-D folder (rgb/, depth/, rgb.txt, depth.txt) that
+// `rgbdtam replay` and the benchmark tools read: 8-bit grey colour PNGs named by colour
+// timestamp, 16-bit depth PNGs named by depth timestamp. PNG encoding and writing run on the
+// recorder's own thread behind a bounded queue of frame slots, so the sensor never waits; a
+// frame that finds the queue full is dropped and counted.
+
+#include <atomic>
+#include <condition_variable>
+#include <mutex>
+#include <thread>
+
+#include "rgbdtam/core/image.hpp"
+#include "rgbdtam/hal/png_encoder.hpp"
+#include "rgbdtam/runtime/latency_stats.hpp"
+#include "rgbdtam/runtime/messages.hpp"
+#include "rgbdtam/runtime/spsc_ring.hpp"
+#include "rgbdtam/runtime/thread_placement.hpp"
+
+namespace rgbdtam {
+
+struct RecorderCounters {
+  uint32_t written = 0;  // colour frames on disk
+  uint32_t depth_written = 0;
+  uint32_t dropped = 0;  // the queue was full
+  uint64_t bytes = 0;
+};
+
+class TumRecorder {
+ public:
+  static constexpr int kQueueSlots = 8;
+  ~TumRecorder();
+  // Creates out_dir (which must not hold a recording already) and its lists.
+  Status open(const char* out_dir, int width, int height);
+  Status start(const ThreadPlacement& placement);
+  // Sensor side: copies the frame into a free slot; false when the queue is full (counted).
+  bool push(const SensorFrame& frame);
+  // Writes what is queued, joins, closes the lists; the first write error, if any.
+  Status finish();
+
+  RecorderCounters counters() const;
+  const LatencyStats& time_per_frame() const { return per_frame_; }
+
+ private:
+  struct Slot {
+    ImageU8 gray;
+    ImageU16 depth;
+    int64_t timestamp_ns = 0;
+    int64_t depth_timestamp_ns = 0;
+    bool has_depth = false;
+  };
+  void run();
+  Status write_frame(const Slot& s);
+  Status write_file(const char* relative, const uint8_t* bytes, size_t n);
+  Status append_line(int fd, const char* stamp, const char* relative);
+
+  char dir_[400] = {};
+  int width_ = 0, height_ = 0;
+  int rgb_list_ = -1, depth_list_ = -1;
+  int64_t last_depth_ns_ = -1;  // two colour frames may share one depth frame
+  SpscRing<Slot> queue_;
+  PngEncoder encoder_;
+  LatencyStats per_frame_;
+  std::atomic<uint32_t> written_{0}, depth_written_{0}, dropped_{0};
+  std::atomic<uint64_t> bytes_{0};
+  Status error_;
+  std::thread thread_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::atomic<bool> stopping_{false};
+};
+
+}  // namespace rgbdtam

@@ -1,0 +1,194 @@
+#include "rgbdtam/hal/tum_recorder.hpp"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+
+#include "rgbdtam/hal/clock.hpp"
+#include "rgbdtam/hal/tum_timestamp.hpp"
+
+namespace rgbdtam {
+namespace {
+Status make_dir(const char* path) {
+  if (::mkdir(path, 0755) == 0 || errno == EEXIST) return Status::ok();
+  return Status::error(StatusCode::kIoError, "%s: %s", path, std::strerror(errno));
+}
+
+bool write_all(int fd, const void* data, size_t n) {
+  const auto* p = static_cast<const uint8_t*>(data);
+  while (n > 0) {
+    const ssize_t w = ::write(fd, p, n);
+    if (w < 0 && errno == EINTR) continue;
+    if (w <= 0) return false;
+    p += w;
+    n -= static_cast<size_t>(w);
+  }
+  return true;
+}
+
+Status open_list(const char* dir, const char* name, const char* header, int* fd) {
+  char path[512];
+  std::snprintf(path, sizeof(path), "%s/%s", dir, name);
+  *fd = ::open(path, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  if (*fd < 0) {
+    return Status::error(StatusCode::kIoError, "%s: %s%s", path, std::strerror(errno),
+                         errno == EEXIST ? " (the folder holds a recording already)" : "");
+  }
+  if (!write_all(*fd, header, std::strlen(header))) {
+    return Status::error(StatusCode::kIoError, "%s: %s", path, std::strerror(errno));
+  }
+  return Status::ok();
+}
+}  // namespace
+
+TumRecorder::~TumRecorder() { (void)finish(); }
+
+Status TumRecorder::open(const char* out_dir, int width, int height) {
+  if (std::snprintf(dir_, sizeof(dir_), "%s", out_dir) >= static_cast<int>(sizeof(dir_))) {
+    return Status::error(StatusCode::kInvalidArgument, "output folder path too long");
+  }
+  width_ = width;
+  height_ = height;
+  char sub[450];
+  RGBDTAM_RETURN_IF_ERROR(make_dir(dir_));
+  std::snprintf(sub, sizeof(sub), "%s/rgb", dir_);
+  RGBDTAM_RETURN_IF_ERROR(make_dir(sub));
+  std::snprintf(sub, sizeof(sub), "%s/depth", dir_);
+  RGBDTAM_RETURN_IF_ERROR(make_dir(sub));
+  RGBDTAM_RETURN_IF_ERROR(open_list(dir_, "rgb.txt",
+                                    "# colour images (8-bit grey), recorded by rgbdtam\n"
+                                    "# timestamp filename\n",
+                                    &rgb_list_));
+  RGBDTAM_RETURN_IF_ERROR(open_list(dir_, "depth.txt",
+                                    "# depth images (16-bit), recorded by rgbdtam\n"
+                                    "# timestamp filename\n",
+                                    &depth_list_));
+  queue_.allocate(kQueueSlots);
+  for (int i = 0; i < kQueueSlots; ++i) {
+    queue_.slot(i).gray.allocate(width, height);
+    queue_.slot(i).depth.allocate(width, height);
+  }
+  encoder_.allocate(width, height);
+  return Status::ok();
+}
+
+Status TumRecorder::start(const ThreadPlacement& placement) {
+  stopping_ = false;
+  thread_ = std::thread([this] { run(); });
+  return place_thread(thread_, placement, "rgbdtam-record");
+}
+
+bool TumRecorder::push(const SensorFrame& frame) {
+  Slot* s = queue_.begin_push();
+  if (s == nullptr || frame.width_px != width_ || frame.height_px != height_) {
+    dropped_.fetch_add(1, std::memory_order_relaxed);
+    return false;
+  }
+  const size_t pixels = static_cast<size_t>(width_) * static_cast<size_t>(height_);
+  std::memcpy(s->gray.data(), frame.gray, pixels);
+  s->has_depth = frame.depth != nullptr;
+  if (s->has_depth) std::memcpy(s->depth.data(), frame.depth, pixels * sizeof(uint16_t));
+  s->timestamp_ns = frame.timestamp_ns;
+  s->depth_timestamp_ns = frame.depth_timestamp_ns;
+  queue_.publish();
+  wake_.notify_one();
+  return true;
+}
+
+Status TumRecorder::write_file(const char* relative, const uint8_t* bytes, size_t n) {
+  char path[512];
+  std::snprintf(path, sizeof(path), "%s/%s", dir_, relative);
+  const int fd = ::open(path, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) return Status::error(StatusCode::kIoError, "%s: %s", path, std::strerror(errno));
+  const bool ok = write_all(fd, bytes, n);
+  const int err = errno;
+  if (::close(fd) != 0 || !ok) {
+    return Status::error(StatusCode::kIoError, "%s: %s", path, std::strerror(ok ? errno : err));
+  }
+  bytes_.fetch_add(n, std::memory_order_relaxed);
+  return Status::ok();
+}
+
+Status TumRecorder::append_line(int fd, const char* stamp, const char* relative) {
+  char line[128];
+  const int n = std::snprintf(line, sizeof(line), "%s %s\n", stamp, relative);
+  if (!write_all(fd, line, static_cast<size_t>(n))) {
+    return Status::error(StatusCode::kIoError, "%s: list write failed: %s", dir_,
+                         std::strerror(errno));
+  }
+  return Status::ok();
+}
+
+Status TumRecorder::write_frame(const Slot& s) {
+  char stamp[32], relative[64];
+  format_seconds(s.timestamp_ns, stamp, sizeof(stamp));
+  std::snprintf(relative, sizeof(relative), "rgb/%s.png", stamp);
+  RGBDTAM_RETURN_IF_ERROR(encoder_.encode_gray8(s.gray.data(), width_, height_));
+  RGBDTAM_RETURN_IF_ERROR(write_file(relative, encoder_.data(), encoder_.size()));
+  RGBDTAM_RETURN_IF_ERROR(append_line(rgb_list_, stamp, relative));
+  written_.fetch_add(1, std::memory_order_relaxed);
+  if (!s.has_depth || s.depth_timestamp_ns == last_depth_ns_) return Status::ok();
+  last_depth_ns_ = s.depth_timestamp_ns;
+  format_seconds(s.depth_timestamp_ns, stamp, sizeof(stamp));
+  std::snprintf(relative, sizeof(relative), "depth/%s.png", stamp);
+  RGBDTAM_RETURN_IF_ERROR(encoder_.encode_gray16(s.depth.data(), width_, height_));
+  RGBDTAM_RETURN_IF_ERROR(write_file(relative, encoder_.data(), encoder_.size()));
+  RGBDTAM_RETURN_IF_ERROR(append_line(depth_list_, stamp, relative));
+  depth_written_.fetch_add(1, std::memory_order_relaxed);
+  return Status::ok();
+}
+
+void TumRecorder::run() {
+  for (;;) {
+    while (Slot* s = queue_.front()) {
+      const int64_t t0 = monotonic_ns();
+      const Status st = write_frame(*s);
+      if (!st.is_ok() && error_.is_ok()) error_ = st;  // keep the first; go on with the rest
+      queue_.pop();
+      per_frame_.add(monotonic_ns() - t0);
+    }
+    if (stopping_.load(std::memory_order_acquire)) return;
+    std::unique_lock<std::mutex> lock(mutex_);
+    wake_.wait_for(lock, std::chrono::milliseconds(20), [this] {
+      return stopping_.load(std::memory_order_acquire) || queue_.front() != nullptr;
+    });
+  }
+}
+
+Status TumRecorder::finish() {
+  if (thread_.joinable()) {
+    stopping_.store(true, std::memory_order_release);
+    wake_.notify_one();
+    thread_.join();
+    // Frames queued after the thread's last look.
+    while (Slot* s = queue_.front()) {
+      const Status st = write_frame(*s);
+      if (!st.is_ok() && error_.is_ok()) error_ = st;
+      queue_.pop();
+    }
+  }
+  for (int* fd : {&rgb_list_, &depth_list_}) {
+    if (*fd >= 0 && ::close(*fd) != 0 && error_.is_ok()) {
+      error_ =
+          Status::error(StatusCode::kIoError, "%s: closing a list: %s", dir_, std::strerror(errno));
+    }
+    *fd = -1;
+  }
+  return error_;
+}
+
+RecorderCounters TumRecorder::counters() const {
+  RecorderCounters c;
+  c.written = written_.load();
+  c.depth_written = depth_written_.load();
+  c.dropped = dropped_.load();
+  c.bytes = bytes_.load();
+  return c;
+}
+
+}  // namespace rgbdtam

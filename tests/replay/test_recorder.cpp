@@ -1,0 +1,106 @@
+// The recorder: PNG encoding round trips exactly, and `rgbdtam record` of a replayed sensor
+// gives a TUM folder whose frames, values and timestamps equal the source's.
+#include <gtest/gtest.h>
+
+#include <random>
+#include <string>
+#include <vector>
+
+#include "record_job.hpp"
+#include "rgbdtam/hal/png_decoder.hpp"
+#include "rgbdtam/hal/png_encoder.hpp"
+#include "test_paths.hpp"
+
+namespace rgbdtam {
+namespace {
+
+TEST(PngEncoder, GreyAndDepthRoundTripExactlyEvenWhenIncompressible) {
+  constexpr int w = 640, h = 480;
+  std::mt19937 rng(7);
+  std::vector<uint8_t> gray(w * h);
+  std::vector<uint16_t> depth(w * h);
+  for (auto& g : gray) g = static_cast<uint8_t>(rng());
+  for (auto& d : depth) d = static_cast<uint16_t>(rng());
+  PngEncoder enc;
+  enc.allocate(w, h);
+  PngDecoder dec;
+  dec.allocate(w);
+  ASSERT_TRUE(enc.encode_gray8(gray.data(), w, h).is_ok());
+  std::vector<uint8_t> gray_back(w * h);
+  ASSERT_TRUE(dec.decode_gray8(enc.data(), enc.size(), w, h, gray_back.data()).is_ok());
+  EXPECT_EQ(gray_back, gray);
+  ASSERT_TRUE(enc.encode_gray16(depth.data(), w, h).is_ok());
+  std::vector<uint16_t> depth_back(w * h);
+  ASSERT_TRUE(dec.decode_gray16(enc.data(), enc.size(), w, h, depth_back.data()).is_ok());
+  EXPECT_EQ(depth_back, depth);
+}
+
+struct Frame {
+  int64_t t_ns, depth_t_ns;
+  std::vector<uint8_t> gray;
+  std::vector<uint16_t> depth;
+};
+
+std::vector<Frame> read_all(const std::string& folder) {
+  TumReplaySource src;
+  EXPECT_TRUE(src.open(folder.c_str(), 640, 480, 20'000'000, 20'000'000).is_ok()) << folder;
+  std::vector<Frame> out;
+  SensorFrame f;
+  Status warning;
+  while (src.next(&f, &warning).is_ok()) {
+    Frame c{
+        f.timestamp_ns, f.depth_timestamp_ns, std::vector<uint8_t>(f.gray, f.gray + 640 * 480), {}};
+    if (f.depth != nullptr) c.depth.assign(f.depth, f.depth + 640 * 480);
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
+TEST(Recorder, RecordingAReplayedSensorGivesTheSameFrames) {
+  const std::string out = testing::make_temp_dir("recorder") + "/recording";
+  const std::string board = testing::source_path("board/host-emulation");
+  RunOptions options;
+  options.board_dir = board.c_str();
+  options.progress = false;
+  RecordJob job;
+  ASSERT_TRUE(job.init(options, out.c_str()).is_ok());
+  ASSERT_TRUE(job.start().is_ok());
+  while (job.step()) {
+  }
+  ASSERT_TRUE(job.finish().is_ok());
+  const RecorderCounters c = job.recorder().counters();
+  EXPECT_EQ(c.written + c.dropped + job.sensor_dropped(), 50u);
+  std::printf("recorded %u frames, %u dropped at the recorder, %u by the sensor; %.2f ms/frame\n",
+              c.written, c.dropped, job.sensor_dropped(),
+              job.recorder().time_per_frame().percentile_ms(0.5));
+
+  const std::vector<Frame> source = read_all(testing::source_path("data/tum_fr1_xyz_clip"));
+  const std::vector<Frame> recorded = read_all(out);
+  ASSERT_EQ(recorded.size(), c.written);
+  size_t s = 0;
+  for (const Frame& r : recorded) {
+    while (s < source.size() && source[s].t_ns != r.t_ns) ++s;  // frames dropped under load
+    ASSERT_LT(s, source.size()) << "recorded a frame the source does not have";
+    EXPECT_EQ(r.depth_t_ns, source[s].depth_t_ns);
+    EXPECT_TRUE(r.gray == source[s].gray) << "frame at " << r.t_ns;
+    EXPECT_TRUE(r.depth == source[s].depth) << "frame at " << r.t_ns;
+  }
+}
+
+TEST(Recorder, RefusesToOverwriteARecordingAndNamesBadFolders) {
+  const std::string out = testing::make_temp_dir("recorder_twice");
+  TumRecorder first;
+  ASSERT_TRUE(first.open(out.c_str(), 64, 48).is_ok());
+  ASSERT_TRUE(first.finish().is_ok());
+  TumRecorder second;
+  const Status again = second.open(out.c_str(), 64, 48);
+  ASSERT_FALSE(again.is_ok());
+  EXPECT_NE(std::string(again.message()).find("holds a recording already"), std::string::npos);
+  TumRecorder bad;
+  const Status s = bad.open("/proc/rgbdtam-cannot-write-here", 64, 48);
+  ASSERT_FALSE(s.is_ok());
+  EXPECT_NE(std::string(s.message()).find("/proc/rgbdtam-cannot-write-here"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace rgbdtam
