@@ -1,0 +1,256 @@
+#include "rgbdtam/hal/v4l2_source.hpp"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <linux/videodev2.h>
+#include <poll.h>
+#include <sys/ioctl.h>
+#include <sys/mman.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+
+namespace rgbdtam {
+namespace {
+// Consecutive EINTR/EAGAIN answers before the device counts as stuck (a fake or a broken
+// driver could otherwise keep the tracker spinning).
+constexpr int kMaxRetries = 100;
+
+void fourcc_text(uint32_t f, char out[5]) {
+  for (int i = 0; i < 4; ++i) {
+    const char c = static_cast<char>((f >> (8 * i)) & 0xFF);
+    out[i] = c >= 32 && c < 127 ? c : '?';
+  }
+  out[4] = '\0';
+}
+}  // namespace
+
+int SystemV4l2Io::open(const char* path, int flags) { return ::open(path, flags); }
+int SystemV4l2Io::close(int fd) { return ::close(fd); }
+int SystemV4l2Io::ioctl(int fd, unsigned long request, void* arg) {
+  return ::ioctl(fd, request, arg);
+}
+void* SystemV4l2Io::mmap(size_t length, int fd, off_t offset) {
+  return ::mmap(nullptr, length, PROT_READ | PROT_WRITE, MAP_SHARED, fd, offset);
+}
+int SystemV4l2Io::munmap(void* address, size_t length) { return ::munmap(address, length); }
+int SystemV4l2Io::poll(int fd, int timeout_ms) {
+  pollfd p{fd, POLLIN, 0};
+  return ::poll(&p, 1, timeout_ms);
+}
+
+V4l2Stream::~V4l2Stream() { close(); }
+
+Status V4l2Stream::open(V4l2Io* io, const char* path, uint32_t fourcc, int width, int height) {
+  io_ = io;
+  std::snprintf(path_, sizeof(path_), "%s", path);
+  fd_ = io->open(path, O_RDWR | O_NONBLOCK | O_CLOEXEC);
+  if (fd_ < 0) {
+    return Status::error(StatusCode::kNotFound, "%s: %s", path, std::strerror(errno));
+  }
+  v4l2_capability cap{};
+  if (io->ioctl(fd_, VIDIOC_QUERYCAP, &cap) < 0) {
+    return Status::error(StatusCode::kIoError, "%s: not a V4L2 device (%s)", path,
+                         std::strerror(errno));
+  }
+  const uint32_t caps =
+      (cap.capabilities & V4L2_CAP_DEVICE_CAPS) != 0 ? cap.device_caps : cap.capabilities;
+  if ((caps & V4L2_CAP_VIDEO_CAPTURE) == 0 || (caps & V4L2_CAP_STREAMING) == 0) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "%s: not a streaming video capture node (capabilities 0x%08x)", path,
+                         caps);
+  }
+  v4l2_format fmt{};
+  fmt.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  fmt.fmt.pix.width = static_cast<uint32_t>(width);
+  fmt.fmt.pix.height = static_cast<uint32_t>(height);
+  fmt.fmt.pix.pixelformat = fourcc;
+  fmt.fmt.pix.field = V4L2_FIELD_NONE;
+  char want[5], got[5];
+  fourcc_text(fourcc, want);
+  if (io->ioctl(fd_, VIDIOC_S_FMT, &fmt) < 0) {
+    return Status::error(StatusCode::kInvalidArgument, "%s: format %s %dx%d refused: %s", path,
+                         want, width, height, std::strerror(errno));
+  }
+  // The driver answers with the nearest format it has: anything else is a refusal.
+  if (fmt.fmt.pix.pixelformat != fourcc || fmt.fmt.pix.width != static_cast<uint32_t>(width) ||
+      fmt.fmt.pix.height != static_cast<uint32_t>(height)) {
+    fourcc_text(fmt.fmt.pix.pixelformat, got);
+    return Status::error(StatusCode::kInvalidArgument,
+                         "%s: format %s %dx%d refused; the device offers %s %ux%u", path, want,
+                         width, height, got, fmt.fmt.pix.width, fmt.fmt.pix.height);
+  }
+  v4l2_requestbuffers req{};
+  req.count = kBuffers;
+  req.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  req.memory = V4L2_MEMORY_MMAP;
+  if (io->ioctl(fd_, VIDIOC_REQBUFS, &req) < 0 || req.count < 2) {
+    return Status::error(StatusCode::kIoError, "%s: no mmap buffers (%s)", path,
+                         std::strerror(errno));
+  }
+  count_ = static_cast<int>(req.count < kBuffers ? req.count : kBuffers);
+  for (int i = 0; i < count_; ++i) {
+    v4l2_buffer b{};
+    b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    b.memory = V4L2_MEMORY_MMAP;
+    b.index = static_cast<uint32_t>(i);
+    if (io->ioctl(fd_, VIDIOC_QUERYBUF, &b) < 0) {
+      return Status::error(StatusCode::kIoError, "%s: buffer %d: %s", path, i,
+                           std::strerror(errno));
+    }
+    void* start = io->mmap(b.length, fd_, static_cast<off_t>(b.m.offset));
+    if (start == MAP_FAILED) {
+      return Status::error(StatusCode::kIoError, "%s: mapping buffer %d: %s", path, i,
+                           std::strerror(errno));
+    }
+    buffers_[i].start = start;
+    buffers_[i].length = b.length;
+    RGBDTAM_RETURN_IF_ERROR(release(i));
+  }
+  v4l2_buf_type type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  if (io->ioctl(fd_, VIDIOC_STREAMON, &type) < 0) {
+    return Status::error(StatusCode::kIoError, "%s: stream on: %s", path, std::strerror(errno));
+  }
+  streaming_ = true;
+  return Status::ok();
+}
+
+Status V4l2Stream::release(int index) {
+  v4l2_buffer b{};
+  b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  b.memory = V4L2_MEMORY_MMAP;
+  b.index = static_cast<uint32_t>(index);
+  if (io_->ioctl(fd_, VIDIOC_QBUF, &b) < 0) {
+    return Status::error(StatusCode::kIoError, "%s: queueing buffer %d: %s", path_, index,
+                         errno == ENODEV ? "device unplugged" : std::strerror(errno));
+  }
+  return Status::ok();
+}
+
+Status V4l2Stream::take(int timeout_ms, int* index, int64_t* timestamp_ns, V4l2Counters* counters) {
+  for (int retries = 0; retries < kMaxRetries;) {
+    const int ready = io_->poll(fd_, timeout_ms);
+    if (ready == 0) {
+      return Status::error(StatusCode::kIoError, "%s: no frame for %d ms", path_, timeout_ms);
+    }
+    if (ready < 0 && errno != EINTR) {
+      return Status::error(StatusCode::kIoError, "%s: %s", path_,
+                           errno == ENODEV ? "device unplugged" : std::strerror(errno));
+    }
+    v4l2_buffer b{};
+    b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    b.memory = V4L2_MEMORY_MMAP;
+    if (ready < 0 || io_->ioctl(fd_, VIDIOC_DQBUF, &b) < 0) {
+      if (errno == EINTR || errno == EAGAIN) {
+        ++retries;
+        ++counters->retries;
+        continue;
+      }
+      return Status::error(StatusCode::kIoError, "%s: %s", path_,
+                           errno == ENODEV ? "device unplugged" : std::strerror(errno));
+    }
+    if (b.index >= static_cast<uint32_t>(count_)) {
+      return Status::error(StatusCode::kIoError, "%s: driver returned buffer %u of %d", path_,
+                           b.index, count_);
+    }
+    if ((b.flags & V4L2_BUF_FLAG_ERROR) != 0) {
+      ++counters->error_buffers;
+      RGBDTAM_RETURN_IF_ERROR(release(static_cast<int>(b.index)));
+      continue;
+    }
+    buffers_[b.index].used = b.bytesused;
+    *index = static_cast<int>(b.index);
+    *timestamp_ns = static_cast<int64_t>(b.timestamp.tv_sec) * 1000000000 +
+                    static_cast<int64_t>(b.timestamp.tv_usec) * 1000;
+    return Status::ok();
+  }
+  return Status::error(StatusCode::kIoError, "%s: device keeps answering EINTR/EAGAIN", path_);
+}
+
+void V4l2Stream::close() {
+  if (fd_ < 0) return;
+  if (streaming_) {
+    v4l2_buf_type type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    (void)io_->ioctl(fd_, VIDIOC_STREAMOFF, &type);
+    streaming_ = false;
+  }
+  for (int i = 0; i < count_; ++i) {
+    if (buffers_[i].start != nullptr) (void)io_->munmap(buffers_[i].start, buffers_[i].length);
+    buffers_[i] = Buffer();
+  }
+  count_ = 0;
+  (void)io_->close(fd_);
+  fd_ = -1;
+}
+
+Status V4l2Source::open(V4l2Io* io, const char* depth_path, const char* colour_path, int width,
+                        int height, int64_t max_pair_dt_ns, int timeout_ms) {
+  width_ = width;
+  height_ = height;
+  max_pair_dt_ns_ = max_pair_dt_ns;
+  timeout_ms_ = timeout_ms;
+  gray_.allocate(width, height);
+  depth_img_.allocate(width, height);
+  RGBDTAM_RETURN_IF_ERROR(depth_.open(io, depth_path, V4L2_PIX_FMT_Z16, width, height));
+  return colour_.open(io, colour_path, V4L2_PIX_FMT_YUYV, width, height);
+}
+
+Status V4l2Source::next(SensorFrame* frame, Status* warning) {
+  *warning = Status::ok();
+  const size_t pixels = static_cast<size_t>(width_) * static_cast<size_t>(height_);
+  int d = -1, c = -1;
+  int64_t td = 0, tc = 0;
+  Status s = depth_.take(timeout_ms_, &d, &td, &counters_);
+  if (s.is_ok()) s = colour_.take(timeout_ms_, &c, &tc, &counters_);
+  // Pair by timestamp: the older of a too-distant pair is let go.
+  while (s.is_ok() && (td - tc > max_pair_dt_ns_ || tc - td > max_pair_dt_ns_)) {
+    ++counters_.unpaired;
+    if (td < tc) {
+      s = depth_.release(d);
+      d = -1;
+      if (s.is_ok()) s = depth_.take(timeout_ms_, &d, &td, &counters_);
+    } else {
+      s = colour_.release(c);
+      c = -1;
+      if (s.is_ok()) s = colour_.take(timeout_ms_, &c, &tc, &counters_);
+    }
+  }
+  if (s.is_ok() && (depth_.bytes_used(d) < pixels * 2 || colour_.bytes_used(c) < pixels * 2)) {
+    s = Status::error(StatusCode::kCorrupt, "short frame (%zu depth, %zu colour bytes)",
+                      depth_.bytes_used(d), colour_.bytes_used(c));
+  }
+  if (s.is_ok()) {
+    std::memcpy(depth_img_.data(), depth_.data(d), pixels * 2);
+    const uint8_t* yuyv = colour_.data(c);
+    uint8_t* gray = gray_.data();
+    for (size_t i = 0; i < pixels; ++i) gray[i] = yuyv[2 * i];  // Y of Y0 U Y1 V
+  }
+  // Buffers go back to the driver whatever happened.
+  if (d >= 0) {
+    const Status r = depth_.release(d);
+    if (s.is_ok()) s = r;
+  }
+  if (c >= 0) {
+    const Status r = colour_.release(c);
+    if (s.is_ok()) s = r;
+  }
+  RGBDTAM_RETURN_IF_ERROR(s);
+  frame->sequence = sequence_++;
+  frame->timestamp_ns = tc;
+  frame->depth_timestamp_ns = td;
+  frame->gray = gray_.data();
+  frame->depth = depth_img_.data();
+  frame->width_px = width_;
+  frame->height_px = height_;
+  ++counters_.delivered;
+  return Status::ok();
+}
+
+void V4l2Source::close() {
+  depth_.close();
+  colour_.close();
+}
+
+}  // namespace rgbdtam
