@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The test command: host release build with every test (the full fr1_xyz test runs where the
-# sequence exists), host debug build under ASan+UBSan, and the static aarch64 build with its
+# sequence exists), host debug build under ASan+UBSan, the dynamic build with the shared-library
+# sensor backends, and the static aarch64 build with its
 # tests under qemu-user, a build for each board's CPU, and a short fuzzing run of the MAVLink
 # decoder. The slow full-sequence test is left to the release build.
 set -euo pipefail
@@ -25,6 +26,8 @@ run() {
 run host-release
 file build/bin/rgbdtam | grep -q "statically linked" || { echo "host rgbdtam is not static" >&2; exit 1; }
 run host-debug -LE long
+# The shared-library sensor backends (libfreenect, tested against fakenect).
+run host-dynamic -LE long
 run aarch64 -LE long
 file build/aarch64/bin/rgbdtam | grep -q "ARM aarch64.*statically linked" \
   || { echo "aarch64 rgbdtam is not a static ARM binary" >&2; exit 1; }

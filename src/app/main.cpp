@@ -30,7 +30,8 @@ void usage() {
                "  rgbdtam run --board <board-folder> [--board-set key=value]...\n"
                "              [--set key=value]... [--max-frames N] [--quiet]\n"
                "  rgbdtam record --board <board-folder> <out-dir> [--board-set key=value]...\n"
-               "                 [--max-frames N]\n");
+               "                 [--max-frames N]\n"
+               "sensor backends in this build: " RGBDTAM_BACKENDS "\n");
 }
 
 // Shared by replay and params: --config and --set build the parameters.
