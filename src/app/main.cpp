@@ -31,7 +31,7 @@ void usage() {
                "              [--set key=value]... [--max-frames N] [--quiet]\n"
                "  rgbdtam record --board <board-folder> <out-dir> [--board-set key=value]...\n"
                "                 [--max-frames N]\n"
-               "sensor backends in this build: " RGBDTAM_BACKENDS "\n");
+               "sensor backends in this build: " RGBDTAM_HAL_BACKENDS "\n");
 }
 
 // Shared by replay and params: --config and --set build the parameters.

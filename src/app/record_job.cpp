@@ -9,14 +9,14 @@ namespace rgbdtam {
 Status RecordJob::init(const RunOptions& options, const char* out_dir) {
   options_ = options;
   RGBDTAM_RETURN_IF_ERROR(load_board_and_params(options, &board_, &params_));
-  RGBDTAM_RETURN_IF_ERROR(open_board_sensor(board_, params_, &replay_, &sensor_));
+  RGBDTAM_RETURN_IF_ERROR(open_board_sensor(board_, params_, &sensor_));
   return recorder_.open(out_dir, params_.camera.width_px, params_.camera.height_px);
 }
 
 Status RecordJob::start() {
   // The recorder's disk work goes where the board puts the mapper: no mapping while recording.
   RGBDTAM_RETURN_IF_ERROR(recorder_.start(board_.mapper));
-  RGBDTAM_RETURN_IF_ERROR(sensor_.start(board_.sensor));
+  RGBDTAM_RETURN_IF_ERROR(sensor_.live->start(board_.sensor));
   started_ns_ = monotonic_ns();
   return Status::ok();
 }
@@ -28,7 +28,7 @@ bool RecordJob::step() {
   }
   SensorFrame frame;
   Status warning;
-  const Status s = sensor_.next(&frame, &warning);
+  const Status s = sensor_.live->next(&frame, &warning);
   if (s.code() == StatusCode::kEndOfStream) return false;
   if (!s.is_ok()) {
     ++sensor_errors_;
@@ -42,7 +42,7 @@ bool RecordJob::step() {
 
 Status RecordJob::finish() {
   wall_ns_ = monotonic_ns() - started_ns_;
-  sensor_.stop();
+  sensor_.live->stop();
   return recorder_.finish();
 }
 
@@ -58,7 +58,7 @@ void RecordJob::print_summary() const {
   std::printf(
       "dropped: %u at the recorder's queue, %u by the sensor (newest kept); sensor "
       "errors %u\n",
-      c.dropped, sensor_.dropped(), sensor_errors_);
+      c.dropped, sensor_.live->dropped(), sensor_errors_);
   std::printf("recorder ms/frame (encode + write): median %.2f, p95 %.2f, max %.2f\n",
               t.percentile_ms(0.5), t.percentile_ms(0.95), t.max_ms());
 }

@@ -22,15 +22,14 @@ class RecordJob {
   void print_summary() const;
 
   uint32_t frames() const { return frames_; }
-  uint32_t sensor_dropped() const { return sensor_.dropped(); }
+  uint32_t sensor_dropped() const { return sensor_.live->dropped(); }
   const TumRecorder& recorder() const { return recorder_; }
 
  private:
   RunOptions options_;
   Board board_;
   Params params_;
-  TumReplaySource replay_;
-  ReplaySensor sensor_;
+  BoardSensor sensor_;
   TumRecorder recorder_;
   uint32_t frames_ = 0;
   uint32_t sensor_errors_ = 0;

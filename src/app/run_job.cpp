@@ -1,6 +1,8 @@
 #include "run_job.hpp"
 
+#include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 
 #include "rgbdtam/hal/clock.hpp"
@@ -47,19 +49,48 @@ Status load_board_and_params(const RunOptions& options, Board* board, Params* pa
   return Status::ok();
 }
 
-Status open_board_sensor(const Board& board, const Params& params, TumReplaySource* replay,
-                         ReplaySensor* sensor) {
-  if (std::strcmp(board.sensor_kind, "replay") != 0) {
-    return Status::error(StatusCode::kInvalidArgument,
-                         "board '%s': sensor.kind '%s' has no backend in this build yet (the "
-                         "live sensor backends are the next issue); use a replay board",
-                         board.name, board.sensor_kind);
+Status open_board_sensor(const Board& board, const Params& params, BoardSensor* sensor) {
+  const int w = params.camera.width_px, h = params.camera.height_px;
+  if (std::strcmp(board.sensor_kind, "replay") == 0) {
+    RGBDTAM_RETURN_IF_ERROR(sensor->replay.open(board.sensor_device, w, h,
+                                                params.sensor.max_rgb_depth_dt_ns,
+                                                params.sensor.depth_time_offset_ns));
+    sensor->replay_sensor.open(&sensor->replay, w, h);
+    sensor->live = &sensor->replay_sensor;
+    return Status::ok();
   }
-  RGBDTAM_RETURN_IF_ERROR(replay->open(board.sensor_device, params.camera.width_px,
-                                       params.camera.height_px, params.sensor.max_rgb_depth_dt_ns,
-                                       params.sensor.depth_time_offset_ns));
-  sensor->open(replay, params.camera.width_px, params.camera.height_px);
-  return Status::ok();
+  if (std::strcmp(board.sensor_kind, "v4l2") == 0) {
+    // sensor.device = <depth node>,<colour node>
+    char depth[kTextBytes];
+    const char* comma = std::strchr(board.sensor_device, ',');
+    if (comma == nullptr) {
+      return Status::error(StatusCode::kInvalidArgument,
+                           "board '%s': sensor.device for v4l2 is '<depth node>,<colour node>'",
+                           board.name);
+    }
+    std::snprintf(depth, sizeof(depth), "%.*s", static_cast<int>(comma - board.sensor_device),
+                  board.sensor_device);
+    constexpr int kTimeoutMs = 1000;
+    RGBDTAM_RETURN_IF_ERROR(sensor->v4l2.open(&sensor->v4l2_io, depth, comma + 1, w, h,
+                                              params.sensor.max_rgb_depth_dt_ns, kTimeoutMs));
+    sensor->live = &sensor->v4l2;
+    return Status::ok();
+  }
+#if RGBDTAM_WITH_FREENECT
+  if (std::strcmp(board.sensor_kind, "freenect") == 0) {
+    const FreenectDepth mode = std::strcmp(board.sensor_depth, "raw") == 0
+                                   ? FreenectDepth::kRaw
+                                   : FreenectDepth::kRegistered;
+    // libfreenect does not document its timestamp unit: the latest of each stream pair up.
+    RGBDTAM_RETURN_IF_ERROR(
+        sensor->freenect.open(std::atoi(board.sensor_device), mode, UINT32_MAX / 2));
+    sensor->live = &sensor->freenect;
+    return Status::ok();
+  }
+#endif
+  return Status::error(StatusCode::kInvalidArgument,
+                       "board '%s': this build has no '%s' sensor backend (it has: %s)", board.name,
+                       board.sensor_kind, RGBDTAM_HAL_BACKENDS);
 }
 
 RunJob::~RunJob() { finish(); }
@@ -67,7 +98,7 @@ RunJob::~RunJob() { finish(); }
 Status RunJob::init(const RunOptions& options) {
   options_ = options;
   RGBDTAM_RETURN_IF_ERROR(load_board_and_params(options, &board_, &params_));
-  RGBDTAM_RETURN_IF_ERROR(open_board_sensor(board_, params_, &replay_, &sensor_));
+  RGBDTAM_RETURN_IF_ERROR(open_board_sensor(board_, params_, &sensor_));
   if (std::strcmp(board_.link_kind, "udp") == 0) {
     char ip[64];
     uint16_t port = 0;
@@ -95,7 +126,7 @@ Status RunJob::init(const RunOptions& options) {
 
 Status RunJob::start() {
   RGBDTAM_RETURN_IF_ERROR(runtime_->start());
-  RGBDTAM_RETURN_IF_ERROR(sensor_.start(board_.sensor));
+  RGBDTAM_RETURN_IF_ERROR(sensor_.live->start(board_.sensor));
   started_ns_ = last_progress_ns_ = monotonic_ns();
   return Status::ok();
 }
@@ -108,7 +139,7 @@ bool RunJob::step() {
   }
   SensorFrame frame;
   Status warning;
-  const Status s = sensor_.next(&frame, &warning);
+  const Status s = sensor_.live->next(&frame, &warning);
   if (s.code() == StatusCode::kEndOfStream) return false;
   if (!s.is_ok()) {
     std::fprintf(stderr, "rgbdtam run: %s\n", s.message());
@@ -118,7 +149,7 @@ bool RunJob::step() {
   if (!warning.is_ok() && options_.progress) {
     std::fprintf(stderr, "rgbdtam run: %s\n", warning.message());
   }
-  (void)runtime_->on_frame(frame, sensor_.arrival_ns());
+  (void)runtime_->on_frame(frame, sensor_.live->arrival_ns());
   const int64_t now = monotonic_ns();
   if (options_.progress && now - last_progress_ns_ >= 1'000'000'000) {
     last_progress_ns_ = now;
@@ -126,7 +157,7 @@ bool RunJob::step() {
     std::fprintf(stderr,
                  "\r%u frames, %u tracked, %u lost, %u deadline misses, %u dropped, tracker "
                  "%.1f ms median",
-                 c.frames, c.tracked, c.lost, c.deadline_misses, sensor_.dropped(),
+                 c.frames, c.tracked, c.lost, c.deadline_misses, sensor_.live->dropped(),
                  runtime_->tracker_time().percentile_ms(0.5));
   }
   return true;
@@ -136,7 +167,7 @@ void RunJob::finish() {
   if (finished_ || runtime_ == nullptr) return;
   finished_ = true;
   wall_ns_ = monotonic_ns() - started_ns_;
-  sensor_.stop();
+  sensor_.live->stop();
   runtime_->stop();
   if (options_.progress) std::fprintf(stderr, "\n");
 }
@@ -153,7 +184,7 @@ void RunJob::print_summary() const {
       "frames: %u in %.1f s (%.1f Hz); tracked %u, lost %u; sensor errors %u, dropped "
       "(newest kept) %u\n",
       c.frames, seconds, seconds > 0 ? c.frames / seconds : 0.0, c.tracked, c.lost, c.sensor_errors,
-      sensor_.dropped());
+      sensor_.live->dropped());
   std::printf("cadence: %u deadline misses (deadline %.1f ms after arrival)\n", c.deadline_misses,
               1e3 / board_.sensor_fps);
   std::printf("tracker task ms: median %.2f, p95 %.2f, max %.2f\n", t.percentile_ms(0.5),

@@ -8,6 +8,10 @@
 
 #include "rgbdtam/hal/gpio.hpp"
 #include "rgbdtam/hal/replay_sensor.hpp"
+#include "rgbdtam/hal/v4l2_source.hpp"
+#if RGBDTAM_WITH_FREENECT
+#include "rgbdtam/hal/freenect_source.hpp"
+#endif
 #include "rgbdtam/runtime/firmware.hpp"
 
 namespace rgbdtam {
@@ -27,9 +31,18 @@ struct RunOptions {
 Status load_board(const char* board_dir, Board* out);
 // The board with its overrides, validated, and its params file with theirs.
 Status load_board_and_params(const RunOptions& options, Board* board, Params* params);
-// The board's sensor source (replay only until the live backends exist).
-Status open_board_sensor(const Board& board, const Params& params, TumReplaySource* replay,
-                         ReplaySensor* sensor);
+// The board's sensor, whichever backend its sensor.kind names (those this build has).
+struct BoardSensor {
+  TumReplaySource replay;
+  ReplaySensor replay_sensor;
+  SystemV4l2Io v4l2_io;
+  V4l2Source v4l2;
+#if RGBDTAM_WITH_FREENECT
+  FreenectSource freenect;
+#endif
+  LiveSensor* live = nullptr;
+};
+Status open_board_sensor(const Board& board, const Params& params, BoardSensor* sensor);
 
 class RunJob {
  public:
@@ -47,7 +60,7 @@ class RunJob {
 
   const FirmwareRuntime& runtime() const { return *runtime_; }
   const Board& board() const { return board_; }
-  uint32_t sensor_dropped() const { return sensor_.dropped(); }
+  uint32_t sensor_dropped() const { return sensor_.live->dropped(); }
   const ByteLink& link() const { return *link_; }
   const GpioOutputs* gpio() const { return gpio_.get(); }
 
@@ -55,8 +68,7 @@ class RunJob {
   RunOptions options_;
   Board board_;
   Params params_;
-  TumReplaySource replay_;
-  ReplaySensor sensor_;
+  BoardSensor sensor_;
   std::unique_ptr<ByteLink> link_;
   std::unique_ptr<GpioOutputs> gpio_;
   std::unique_ptr<FirmwareRuntime> runtime_;

@@ -70,6 +70,7 @@ Status FreenectSource::open(int device_index, FreenectDepth depth, uint32_t max_
 }
 
 void FreenectSource::on_depth(const void* data, uint32_t ticks) {
+  if (have_depth_) ++dropped_;  // overtaken before it was paired: the newest is kept
   const auto* in = static_cast<const uint16_t*>(data);
   uint16_t* out = depth_.data();
   const int n = kWidth * kHeight;
@@ -83,6 +84,7 @@ void FreenectSource::on_depth(const void* data, uint32_t ticks) {
 }
 
 void FreenectSource::on_video(const void* data, uint32_t ticks) {
+  if (have_video_) ++dropped_;
   const auto* rgb = static_cast<const uint8_t*>(data);
   uint8_t* out = gray_.data();
   for (int i = 0; i < kWidth * kHeight; ++i, rgb += 3) {
@@ -112,8 +114,9 @@ Status FreenectSource::next(SensorFrame* frame, Status* warning) {
         have_video_ = false;
       continue;
     }
+    arrival_ns_ = monotonic_ns();
     frame->sequence = sequence_++;
-    frame->timestamp_ns = monotonic_ns();
+    frame->timestamp_ns = arrival_ns_;
     frame->depth_timestamp_ns = frame->timestamp_ns;
     frame->gray = gray_.data();
     frame->depth = depth_.data();

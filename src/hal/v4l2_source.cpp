@@ -12,6 +12,8 @@
 #include <cstdlib>
 #include <cstring>
 
+#include "rgbdtam/hal/clock.hpp"
+
 namespace rgbdtam {
 namespace {
 // Consecutive EINTR/EAGAIN answers before the device counts as stuck (a fake or a broken
@@ -130,43 +132,61 @@ Status V4l2Stream::release(int index) {
 }
 
 Status V4l2Stream::take(int timeout_ms, int* index, int64_t* timestamp_ns, V4l2Counters* counters) {
+  *index = -1;
+  // An error while holding a buffer gives it back first.
+  auto fail = [&](Status s) {
+    if (*index >= 0) (void)release(*index);
+    *index = -1;
+    return s;
+  };
+  int wait_ms = timeout_ms;
   for (int retries = 0; retries < kMaxRetries;) {
-    const int ready = io_->poll(fd_, timeout_ms);
+    const int ready = io_->poll(fd_, wait_ms);
     if (ready == 0) {
+      if (*index >= 0) return Status::ok();  // nothing newer waiting
       return Status::error(StatusCode::kIoError, "%s: no frame for %d ms", path_, timeout_ms);
     }
     if (ready < 0 && errno != EINTR) {
-      return Status::error(StatusCode::kIoError, "%s: %s", path_,
-                           errno == ENODEV ? "device unplugged" : std::strerror(errno));
+      return fail(Status::error(StatusCode::kIoError, "%s: %s", path_,
+                                errno == ENODEV ? "device unplugged" : std::strerror(errno)));
     }
     v4l2_buffer b{};
     b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
     b.memory = V4L2_MEMORY_MMAP;
     if (ready < 0 || io_->ioctl(fd_, VIDIOC_DQBUF, &b) < 0) {
+      if (errno == EAGAIN && *index >= 0) return Status::ok();
       if (errno == EINTR || errno == EAGAIN) {
         ++retries;
         ++counters->retries;
         continue;
       }
-      return Status::error(StatusCode::kIoError, "%s: %s", path_,
-                           errno == ENODEV ? "device unplugged" : std::strerror(errno));
+      return fail(Status::error(StatusCode::kIoError, "%s: %s", path_,
+                                errno == ENODEV ? "device unplugged" : std::strerror(errno)));
     }
     if (b.index >= static_cast<uint32_t>(count_)) {
-      return Status::error(StatusCode::kIoError, "%s: driver returned buffer %u of %d", path_,
-                           b.index, count_);
+      return fail(Status::error(StatusCode::kIoError, "%s: driver returned buffer %u of %d", path_,
+                                b.index, count_));
     }
     if ((b.flags & V4L2_BUF_FLAG_ERROR) != 0) {
       ++counters->error_buffers;
-      RGBDTAM_RETURN_IF_ERROR(release(static_cast<int>(b.index)));
+      const Status r = release(static_cast<int>(b.index));
+      if (!r.is_ok()) return fail(r);
       continue;
+    }
+    if (*index >= 0) {  // a newer frame overtook the one held so far
+      ++counters->overtaken;
+      const Status r = release(*index);
+      *index = -1;
+      if (!r.is_ok()) return fail(r);
     }
     buffers_[b.index].used = b.bytesused;
     *index = static_cast<int>(b.index);
     *timestamp_ns = static_cast<int64_t>(b.timestamp.tv_sec) * 1000000000 +
                     static_cast<int64_t>(b.timestamp.tv_usec) * 1000;
-    return Status::ok();
+    wait_ms = 0;  // anything already waiting is newer still
   }
-  return Status::error(StatusCode::kIoError, "%s: device keeps answering EINTR/EAGAIN", path_);
+  return fail(
+      Status::error(StatusCode::kIoError, "%s: device keeps answering EINTR/EAGAIN", path_));
 }
 
 void V4l2Stream::close() {
@@ -237,6 +257,7 @@ Status V4l2Source::next(SensorFrame* frame, Status* warning) {
     if (s.is_ok()) s = r;
   }
   RGBDTAM_RETURN_IF_ERROR(s);
+  arrival_ns_ = monotonic_ns();
   frame->sequence = sequence_++;
   frame->timestamp_ns = tc;
   frame->depth_timestamp_ns = td;

@@ -43,6 +43,8 @@ const KeySpec kSpecs[] = {
     RGBDTAM_TEXT("sensor.device", "replay: TUM folder; else device path or URI", sensor_device,
                  true),
     RGBDTAM_TEXT("sensor.config", "camera and tracking params file", sensor_config, true),
+    RGBDTAM_TEXT("sensor.depth", "freenect: registered (mm, device calibration) or raw",
+                 sensor_depth, false),
     {"sensor.fps", ValueType::kReal, 1, 120, "Hz", "frame rate: the tracking cadence",
      RGBDTAM_FIELD(sensor_fps), false},
     RGBDTAM_TEXT("link.kind", "udp or serial", link_kind, true),
@@ -145,6 +147,12 @@ Status validate_board(const Board& b) {
     return Status::error(StatusCode::kInvalidArgument,
                          "board '%s': sensor.kind '%s' is not replay, openni2, freenect or v4l2",
                          b.name, b.sensor_kind);
+  }
+  static const char* const kDepthModes[] = {"registered", "raw"};
+  if (!one_of(b.sensor_depth, kDepthModes, 2)) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "board '%s': sensor.depth '%s' is not registered or raw", b.name,
+                         b.sensor_depth);
   }
   if (!one_of(b.link_kind, kLinks, 2)) {
     return Status::error(StatusCode::kInvalidArgument,

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "record_job.hpp"
 #include "rgbdtam/hal/freenect_source.hpp"
 #include "rgbdtam/hal/tum_replay_source.hpp"
 #include "rgbdtam/runtime/tracking_pipeline.hpp"
@@ -187,6 +188,46 @@ TEST(Freenect, TrackingThroughTheBackendEqualsTheTumReplayOfTheSameFrames) {
       "fakenect vs TUM replay: largest pose difference %.3g m over %d frames; last "
       "frame %.2f mm from the truth\n",
       worst, kFrames, 1e3 * (last_truth.inverse() * through_freenect.back()).translation().norm());
+}
+
+TEST(Freenect, RecordingAKinectThroughFakenectGivesItsFrames) {
+  const std::string dump = testing::make_temp_dir("fakenect_record");
+  std::vector<DumpFrame> frames(4);
+  for (int f = 0; f < 4; ++f) {
+    frames[f].gray.assign(kW * kH, static_cast<uint8_t>(30 + 20 * f));
+    frames[f].raw.assign(kW * kH, static_cast<uint16_t>(600 + 50 * f));
+    frames[f].depth_ticks = frames[f].video_ticks = 1000u * static_cast<uint32_t>(f + 1);
+  }
+  write_dump(dump, frames);
+  setenv("FAKENECT_PATH", dump.c_str(), 1);
+  const std::string out = testing::make_temp_dir("fakenect_recording") + "/recording";
+  const std::string board = testing::source_path("board/raspberry-pi-4");
+  RunOptions options;
+  options.board_dir = board.c_str();
+  options.board_overrides[options.board_override_count++] = "sensor.depth=raw";
+  options.board_overrides[options.board_override_count++] =
+      "threads.mapper_cpu=-1";  // 2 cores here
+  options.max_frames = 4;
+  options.progress = false;
+  RecordJob job;
+  const Status s = job.init(options, out.c_str());
+  ASSERT_TRUE(s.is_ok()) << s.message();
+  const Status started = job.start();
+  ASSERT_TRUE(started.is_ok()) << started.message();
+  while (job.step()) {
+  }
+  ASSERT_TRUE(job.finish().is_ok());
+  EXPECT_EQ(job.recorder().counters().written, 4u);
+  TumReplaySource replay;
+  ASSERT_TRUE(replay.open(out.c_str(), kW, kH, 20'000'000, 0).is_ok());
+  for (int f = 0; f < 4; ++f) {
+    SensorFrame r;
+    Status warning;
+    ASSERT_TRUE(replay.next(&r, &warning).is_ok()) << f;
+    ASSERT_NE(r.depth, nullptr);
+    EXPECT_EQ(r.gray[1234], frames[f].gray[1234]);
+    EXPECT_EQ(r.depth[4321], FreenectSource::raw_to_mm(frames[f].raw[4321]));
+  }
 }
 
 }  // namespace

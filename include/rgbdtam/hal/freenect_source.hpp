@@ -23,13 +23,18 @@ namespace rgbdtam {
 
 enum class FreenectDepth { kRegistered, kRaw };
 
-class FreenectSource : public SensorSource {
+class FreenectSource : public LiveSensor {
  public:
   static constexpr int kWidth = 640, kHeight = 480;
   ~FreenectSource() override;
   // max_pair_ticks: the largest device-timestamp gap between paired depth and colour frames.
   Status open(int device_index, FreenectDepth depth, uint32_t max_pair_ticks);
   Status next(SensorFrame* frame, Status* warning) override;
+  // libfreenect's event loop runs inside next(), on the caller's thread.
+  Status start(const ThreadPlacement&) override { return Status::ok(); }
+  void stop() override {}
+  int64_t arrival_ns() const override { return arrival_ns_; }
+  uint32_t dropped() const override { return dropped_; }
   void close();
 
   // The device timestamps of the last frame next() delivered.
@@ -53,6 +58,8 @@ class FreenectSource : public SensorSource {
   bool have_depth_ = false, have_video_ = false;
   uint32_t depth_ticks_ = 0, colour_ticks_ = 0;
   uint32_t sequence_ = 0;
+  uint32_t dropped_ = 0;
+  int64_t arrival_ns_ = 0;
 };
 
 }  // namespace rgbdtam

@@ -20,18 +20,18 @@
 
 namespace rgbdtam {
 
-class ReplaySensor : public SensorSource {
+class ReplaySensor : public LiveSensor {
  public:
   ~ReplaySensor() override;
   // Init time: allocates the slots for the source's frames (width x height).
   void open(TumReplaySource* source, int width, int height);
-  Status start(const ThreadPlacement& placement);
+  Status start(const ThreadPlacement& placement) override;
   // Waits for a frame newer than the last one taken; kEndOfStream after the last.
   Status next(SensorFrame* frame, Status* warning) override;
   // When the frame last returned by next() was published by the sensor.
-  int64_t arrival_ns() const { return slots_[front_].arrival_ns; }
-  uint32_t dropped() const { return dropped_.load(std::memory_order_relaxed); }
-  void stop();
+  int64_t arrival_ns() const override { return slots_[front_].arrival_ns; }
+  uint32_t dropped() const override { return dropped_.load(std::memory_order_relaxed); }
+  void stop() override;
 
  private:
   struct Slot {

@@ -4,6 +4,7 @@
 
 #include "rgbdtam/core/status.hpp"
 #include "rgbdtam/runtime/messages.hpp"
+#include "rgbdtam/runtime/thread_placement.hpp"
 
 namespace rgbdtam {
 
@@ -14,6 +15,18 @@ class SensorSource {
   // was skipped (its message says why) and the caller may call again. `warning` is set when
   // a frame is delivered degraded (e.g. without depth).
   virtual Status next(SensorFrame* frame, Status* warning) = 0;
+};
+
+// A sensor the firmware runtime drives: it delivers frames at its own rate, started after
+// init. next() waits for the next frame and always returns the newest one; frames overtaken
+// meanwhile are dropped and counted.
+class LiveSensor : public SensorSource {
+ public:
+  virtual Status start(const ThreadPlacement& placement) = 0;
+  virtual void stop() = 0;
+  // When the frame last returned by next() arrived (CLOCK_MONOTONIC ns).
+  virtual int64_t arrival_ns() const = 0;
+  virtual uint32_t dropped() const = 0;
 };
 
 }  // namespace rgbdtam

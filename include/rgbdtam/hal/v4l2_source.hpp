@@ -41,6 +41,7 @@ struct V4l2Counters {
   uint32_t error_buffers = 0;  // dequeued with V4L2_BUF_FLAG_ERROR: skipped and requeued
   uint32_t unpaired = 0;       // frames without a partner within the pairing limit
   uint32_t retries = 0;        // EINTR / EAGAIN
+  uint32_t overtaken = 0;      // older filled buffers let go for a newer one (newest kept)
 };
 
 // One capture node: format negotiation, mmap buffers, streaming.
@@ -49,7 +50,8 @@ class V4l2Stream {
   static constexpr int kBuffers = 4;
   ~V4l2Stream();
   Status open(V4l2Io* io, const char* path, uint32_t fourcc, int width, int height);
-  // The next filled buffer (waits up to timeout_ms). Must be released before the next take.
+  // The newest filled buffer (waits up to timeout_ms for one; older ones already waiting are
+  // requeued and counted as overtaken). Must be released before the next take.
   Status take(int timeout_ms, int* index, int64_t* timestamp_ns, V4l2Counters* counters);
   Status release(int index);
   const uint8_t* data(int index) const {
@@ -72,12 +74,17 @@ class V4l2Stream {
   bool streaming_ = false;
 };
 
-class V4l2Source : public SensorSource {
+class V4l2Source : public LiveSensor {
  public:
   // depth_path: the Z16 node; colour_path: the YUYV node; frames width x height on both.
   Status open(V4l2Io* io, const char* depth_path, const char* colour_path, int width, int height,
               int64_t max_pair_dt_ns, int timeout_ms);
   Status next(SensorFrame* frame, Status* warning) override;
+  // The streams run from open(); start() and stop() have nothing more to do.
+  Status start(const ThreadPlacement&) override { return Status::ok(); }
+  void stop() override {}
+  int64_t arrival_ns() const override { return arrival_ns_; }
+  uint32_t dropped() const override { return counters_.overtaken; }
   const V4l2Counters& counters() const { return counters_; }
   void close();
 
@@ -89,6 +96,7 @@ class V4l2Source : public SensorSource {
   int64_t max_pair_dt_ns_ = 0;
   int timeout_ms_ = 0;
   uint32_t sequence_ = 0;
+  int64_t arrival_ns_ = 0;
   V4l2Counters counters_;
 };
 

@@ -19,9 +19,10 @@ struct Board {
   char preset[kTextBytes] = "";  // the CMake preset that builds for it
   int cpu_count = 1;             // cores the thread placement may name
 
-  char sensor_kind[kTextBytes] = "";    // replay | openni2 | freenect | v4l2
-  char sensor_device[kTextBytes] = "";  // replay: a TUM folder; else a device path or URI
-  char sensor_config[kTextBytes] = "";  // the camera/tracking params file (config/)
+  char sensor_kind[kTextBytes] = "";             // replay | openni2 | freenect | v4l2
+  char sensor_device[kTextBytes] = "";           // replay: a TUM folder; else a device path or URI
+  char sensor_config[kTextBytes] = "";           // the camera/tracking params file (config/)
+  char sensor_depth[kTextBytes] = "registered";  // freenect: registered (mm) or raw (11-bit)
   double sensor_fps = 30.0;
 
   char link_kind[kTextBytes] = "";        // udp | serial
