@@ -114,10 +114,13 @@ Status TumRecorder::write_file(const char* relative, const uint8_t* bytes, size_
   return Status::ok();
 }
 
-Status TumRecorder::append_line(int fd, const char* stamp, const char* relative) {
-  char line[128];
+Status TumRecorder::store_encoded(const char* folder, int64_t stamp_ns, int list_fd) {
+  char stamp[32], relative[64], line[128];
+  format_seconds(stamp_ns, stamp, sizeof(stamp));
+  std::snprintf(relative, sizeof(relative), "%s/%s.png", folder, stamp);
+  RGBDTAM_RETURN_IF_ERROR(write_file(relative, encoder_.data(), encoder_.size()));
   const int n = std::snprintf(line, sizeof(line), "%s %s\n", stamp, relative);
-  if (!write_all(fd, line, static_cast<size_t>(n))) {
+  if (!write_all(list_fd, line, static_cast<size_t>(n))) {
     return Status::error(StatusCode::kIoError, "%s: list write failed: %s", dir_,
                          std::strerror(errno));
   }
@@ -125,20 +128,13 @@ Status TumRecorder::append_line(int fd, const char* stamp, const char* relative)
 }
 
 Status TumRecorder::write_frame(const Slot& s) {
-  char stamp[32], relative[64];
-  format_seconds(s.timestamp_ns, stamp, sizeof(stamp));
-  std::snprintf(relative, sizeof(relative), "rgb/%s.png", stamp);
   RGBDTAM_RETURN_IF_ERROR(encoder_.encode_gray8(s.gray.data(), width_, height_));
-  RGBDTAM_RETURN_IF_ERROR(write_file(relative, encoder_.data(), encoder_.size()));
-  RGBDTAM_RETURN_IF_ERROR(append_line(rgb_list_, stamp, relative));
+  RGBDTAM_RETURN_IF_ERROR(store_encoded("rgb", s.timestamp_ns, rgb_list_));
   written_.fetch_add(1, std::memory_order_relaxed);
   if (!s.has_depth || s.depth_timestamp_ns == last_depth_ns_) return Status::ok();
   last_depth_ns_ = s.depth_timestamp_ns;
-  format_seconds(s.depth_timestamp_ns, stamp, sizeof(stamp));
-  std::snprintf(relative, sizeof(relative), "depth/%s.png", stamp);
   RGBDTAM_RETURN_IF_ERROR(encoder_.encode_gray16(s.depth.data(), width_, height_));
-  RGBDTAM_RETURN_IF_ERROR(write_file(relative, encoder_.data(), encoder_.size()));
-  RGBDTAM_RETURN_IF_ERROR(append_line(depth_list_, stamp, relative));
+  RGBDTAM_RETURN_IF_ERROR(store_encoded("depth", s.depth_timestamp_ns, depth_list_));
   depth_written_.fetch_add(1, std::memory_order_relaxed);
   return Status::ok();
 }

@@ -52,7 +52,8 @@ class TumRecorder {
   void run();
   Status write_frame(const Slot& s);
   Status write_file(const char* relative, const uint8_t* bytes, size_t n);
-  Status append_line(int fd, const char* stamp, const char* relative);
+  // Writes the encoder's output as <folder>/<stamp>.png and lists it.
+  Status store_encoded(const char* folder, int64_t stamp_ns, int list_fd);
 
   char dir_[400] = {};
   int width_ = 0, height_ = 0;
