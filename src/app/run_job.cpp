@@ -9,6 +9,7 @@
 #include "rgbdtam/hal/file.hpp"
 #include "rgbdtam/hal/serial_link.hpp"
 #include "rgbdtam/hal/udp_link.hpp"
+#include "rgbdtam/hal/usb_devices.hpp"
 
 namespace rgbdtam {
 namespace {
@@ -51,6 +52,12 @@ Status load_board_and_params(const RunOptions& options, Board* board, Params* pa
 
 Status open_board_sensor(const Board& board, const Params& params, BoardSensor* sensor) {
   const int w = params.camera.width_px, h = params.camera.height_px;
+  UsbId usb;
+  if (board.sensor_usb_id[0] != '\0' && parse_usb_id(board.sensor_usb_id, &usb)) {
+    char what[kTextBytes + 32];
+    std::snprintf(what, sizeof(what), "board '%s': sensor", board.name);
+    RGBDTAM_RETURN_IF_ERROR(require_usb_device(board.sysfs_root, usb, what));
+  }
   if (std::strcmp(board.sensor_kind, "replay") == 0) {
     RGBDTAM_RETURN_IF_ERROR(sensor->replay.open(board.sensor_device, w, h,
                                                 params.sensor.max_rgb_depth_dt_ns,

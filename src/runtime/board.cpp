@@ -45,6 +45,9 @@ const KeySpec kSpecs[] = {
     RGBDTAM_TEXT("sensor.config", "camera and tracking params file", sensor_config, true),
     RGBDTAM_TEXT("sensor.depth", "freenect: registered (mm, device calibration) or raw",
                  sensor_depth, false),
+    RGBDTAM_TEXT("sensor.usb_id", "vendor:product (hex) that must be attached, e.g. 045e:02ae",
+                 sensor_usb_id, false),
+    RGBDTAM_TEXT("board.sysfs_root", "where sysfs is mounted (/sys)", sysfs_root, false),
     {"sensor.fps", ValueType::kReal, 1, 120, "Hz", "frame rate: the tracking cadence",
      RGBDTAM_FIELD(sensor_fps), false},
     RGBDTAM_TEXT("link.kind", "udp or serial", link_kind, true),
@@ -147,6 +150,15 @@ Status validate_board(const Board& b) {
     return Status::error(StatusCode::kInvalidArgument,
                          "board '%s': sensor.kind '%s' is not replay, openni2, freenect or v4l2",
                          b.name, b.sensor_kind);
+  }
+  unsigned vendor = 0, product = 0;
+  int used = 0;
+  if (b.sensor_usb_id[0] != '\0' &&
+      (std::sscanf(b.sensor_usb_id, "%4x:%4x%n", &vendor, &product, &used) != 2 ||
+       b.sensor_usb_id[used] != '\0')) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "board '%s': sensor.usb_id '%s' is not vendor:product in hex", b.name,
+                         b.sensor_usb_id);
   }
   static const char* const kDepthModes[] = {"registered", "raw"};
   if (!one_of(b.sensor_depth, kDepthModes, 2)) {

@@ -3,6 +3,7 @@
 // frames, values and device timestamps, and tracking through it must give the same trajectory
 // as the TUM replay of the same frames. Runs with LD_LIBRARY_PATH at fakenect (CMake sets it).
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -207,6 +208,17 @@ TEST(Freenect, RecordingAKinectThroughFakenectGivesItsFrames) {
   options.board_overrides[options.board_override_count++] = "sensor.depth=raw";
   options.board_overrides[options.board_override_count++] =
       "threads.mapper_cpu=-1";  // 2 cores here
+  // The board wants its Kinect on the USB bus: a fake sysfs shows one.
+  const std::string sysfs = testing::make_temp_dir("fakenect_sysfs");
+  std::string dir = sysfs;
+  for (const char* part : {"/bus", "/usb", "/devices", "/1-1"}) {
+    dir += part;
+    ::mkdir(dir.c_str(), 0755);
+  }
+  ASSERT_TRUE(testing::write_text(dir + "/idVendor", "045e\n"));
+  ASSERT_TRUE(testing::write_text(dir + "/idProduct", "02ae\n"));
+  const std::string sysfs_override = "board.sysfs_root=" + sysfs;
+  options.board_overrides[options.board_override_count++] = sysfs_override.c_str();
   options.max_frames = 4;
   options.progress = false;
   RecordJob job;

@@ -23,6 +23,8 @@ struct Board {
   char sensor_device[kTextBytes] = "";           // replay: a TUM folder; else a device path or URI
   char sensor_config[kTextBytes] = "";           // the camera/tracking params file (config/)
   char sensor_depth[kTextBytes] = "registered";  // freenect: registered (mm) or raw (11-bit)
+  char sensor_usb_id[kTextBytes] = "";           // vvvv:pppp that must be attached; "" = none
+  char sysfs_root[kTextBytes] = "/sys";          // where sysfs is mounted
   double sensor_fps = 30.0;
 
   char link_kind[kTextBytes] = "";        // udp | serial

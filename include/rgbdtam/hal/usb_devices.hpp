@@ -1,0 +1,27 @@
+#pragma once
+// USB presence of the board's sensor, read from sysfs (<root>/bus/usb/devices/*/idVendor and
+// idProduct), which needs no library and links statically. A board that declares its sensor's
+// USB id is refused at start-up when no such device is attached, with what is attached.
+
+#include <cstdint>
+
+#include "rgbdtam/core/fixed_vector.hpp"
+#include "rgbdtam/core/status.hpp"
+
+namespace rgbdtam {
+
+struct UsbId {
+  uint16_t vendor = 0;
+  uint16_t product = 0;
+};
+
+// Parses "vvvv:pppp" (hex); false when malformed.
+bool parse_usb_id(const char* text, UsbId* id);
+
+// The attached devices (at most `out`'s capacity); sysfs_root is "/sys" on a board.
+Status list_usb_devices(const char* sysfs_root, FixedVector<UsbId>* out);
+
+// Ok when `wanted` is attached; else an error naming it and listing what is attached.
+Status require_usb_device(const char* sysfs_root, const UsbId& wanted, const char* what);
+
+}  // namespace rgbdtam
