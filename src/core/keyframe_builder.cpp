@@ -2,6 +2,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 
 #include "rgbdtam/core/tracker.hpp"
 
@@ -104,13 +105,18 @@ void KeyframeBuilder::build(const FramePyramid& frame, uint32_t id, int64_t time
   }
 }
 
-void KeyframeBuilder::build_photometric(const FramePyramid& frame, FixedVector<TrackPoint>* sets) {
-  prepare(frame);
+void KeyframeBuilder::build_photometric(const FramePyramid& frame, const ImageU8& edges,
+                                        FixedVector<TrackPoint>* sets) {
+  prepare(frame, &edges);
   for (int l = 0; l < kPyramidLevels; ++l) select_photometric(frame, frame, l, &sets[l]);
 }
 
-void KeyframeBuilder::prepare(const FramePyramid& frame) {
-  canny_.detect(frame.gray(0), opt_.canny_low, opt_.canny_high, &edges_[0]);
+void KeyframeBuilder::prepare(const FramePyramid& frame, const ImageU8* edges) {
+  if (edges != nullptr) {
+    std::memcpy(edges_[0].data(), edges->data(), static_cast<size_t>(edges_[0].size()));
+  } else {
+    canny_.detect(frame.gray(0), opt_.canny_low, opt_.canny_high, &edges_[0]);
+  }
   for (int l = 0; l < kPyramidLevels; ++l) {
     compute_gradients(frame.gray(l), &gx_[l], &gy_[l]);
     compute_depth_gradients(frame.inverse_depth(l), &dgx_[l], &dgy_[l]);

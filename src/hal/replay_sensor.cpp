@@ -3,8 +3,6 @@
 #include <errno.h>
 #include <time.h>
 
-#include <cstring>
-
 #include "rgbdtam/hal/clock.hpp"
 
 namespace rgbdtam {
@@ -65,8 +63,7 @@ void ReplaySensor::run() {
     source_->skip_to(newest);
     sleep_until_ns(due_ns(newest));
     Slot& s = slots_[back_];
-    SensorFrame f;
-    const Status status = source_->next(&f, &s.warning);
+    const Status status = source_->next_into(&s.gray, &s.depth, &s.frame, &s.warning);
     if (!status.is_ok()) {
       {
         std::lock_guard<std::mutex> lock(mutex_);
@@ -76,12 +73,6 @@ void ReplaySensor::run() {
       published_.notify_one();
       continue;
     }
-    const size_t pixels = static_cast<size_t>(f.width_px) * static_cast<size_t>(f.height_px);
-    std::memcpy(s.gray.data(), f.gray, pixels);
-    if (f.depth != nullptr) std::memcpy(s.depth.data(), f.depth, pixels * sizeof(uint16_t));
-    s.frame = f;
-    s.frame.gray = s.gray.data();
-    s.frame.depth = f.depth != nullptr ? s.depth.data() : nullptr;
     s.arrival_ns = monotonic_ns();
     publish();
   }

@@ -115,18 +115,23 @@ Status TumReplaySource::load(const TumListEntry& e, bool depth, void* out) {
 }
 
 Status TumReplaySource::next(SensorFrame* frame, Status* warning) {
+  return next_into(&gray_, &depth_img_, frame, warning);
+}
+
+Status TumReplaySource::next_into(ImageU8* gray, ImageU16* depth, SensorFrame* frame,
+                                  Status* warning) {
   *warning = Status::ok();
   if (cursor_ >= rgb_.size) return Status::error(StatusCode::kEndOfStream, "end of sequence");
   const int i = cursor_++;
   const TumListEntry& rgb = rgb_.entries[i];
-  const Status s = load(rgb, false, gray_.data());
+  const Status s = load(rgb, false, gray->data());
   if (!s.is_ok()) {
     ++counters_.skipped;
     return s;
   }
   frame->sequence = static_cast<uint32_t>(i);
   frame->timestamp_ns = rgb.timestamp_ns;
-  frame->gray = gray_.data();
+  frame->gray = gray->data();
   frame->width_px = width_;
   frame->height_px = height_;
   frame->depth = nullptr;
@@ -136,9 +141,9 @@ Status TumReplaySource::next(SensorFrame* frame, Status* warning) {
     *warning = Status::error(StatusCode::kNotFound, "%s/%s: no depth frame within the limit",
                              folder_, rgb.path);
   } else {
-    const Status ds = load(depth_.entries[d], true, depth_img_.data());
+    const Status ds = load(depth_.entries[d], true, depth->data());
     if (ds.is_ok()) {
-      frame->depth = depth_img_.data();
+      frame->depth = depth->data();
       frame->depth_timestamp_ns = depth_.entries[d].timestamp_ns;
     } else {
       *warning = ds;

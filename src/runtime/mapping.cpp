@@ -47,6 +47,7 @@ Status MappingModule::init(const Params& params, const PinholeIntrinsics& k, Clo
     job.seeds.allocate(k, mv_);
     job.gray.allocate(k.width_px, k.height_px);
     job.sensor_inverse_depth.allocate(k.width_px, k.height_px);
+    job.edges.allocate(k.width_px, k.height_px);
   }
   for (EarlierFrame& e : earlier_) e.gray.allocate(k.width_px, k.height_px);
   builder_.allocate(k, params.tracker);
@@ -59,11 +60,12 @@ void MappingModule::start(Job* job, const MapperFrame& frame) {
   job->keyframe = frame.new_keyframe;
   copy_image(frame.gray, &job->gray);
   copy_image(frame.inverse_depth, &job->sensor_inverse_depth);
+  std::memcpy(job->edges.data(), frame.edges.data(), static_cast<size_t>(frame.edges.size()));
   float nearest_m = 0.f;
   job->median_depth_m = median_depth_m(job->sensor_inverse_depth, &nearest_m);
   const float max_rho =
       nearest_m > 0.f ? std::min(mv_.max_inverse_depth, 2.f / nearest_m) : mv_.max_inverse_depth;
-  job->seeds.reset(job->gray, job->sensor_inverse_depth, frame.edges, frame.T_w_c, max_rho);
+  job->seeds.reset(job->gray, job->sensor_inverse_depth, job->edges, frame.T_w_c, max_rho);
   job->T_w_last_used = frame.T_w_c;
   job->frames_used = 0;
   job->started = ++arrivals_;
@@ -184,7 +186,7 @@ void MappingModule::finalize(Job* job) {
   }
   fused_.build_inverse_depth_levels();
   Keyframe* kf = job->keyframe;
-  builder_.build_photometric(fused_, kf->inactive_photometric());
+  builder_.build_photometric(fused_, job->edges, kf->inactive_photometric());
   kf->map_points.clear();
   const PinholeIntrinsics& k = fused_.intrinsics(0);
   for (const FusedPixel& p : pixels_) {

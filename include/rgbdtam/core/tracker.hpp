@@ -83,13 +83,16 @@ class KeyframeBuilder {
   // (the geometric points always use the sensor's).
   void build(const FramePyramid& frame, uint32_t id, int64_t timestamp_ns, const SE3& T_w_k,
              Keyframe* kf, const FramePyramid* photometric_depth = nullptr);
-  // Photometric points only, into sets[0 .. kPyramidLevels), from the frame's (fused) depth.
-  void build_photometric(const FramePyramid& frame, FixedVector<TrackPoint>* sets);
+  // Photometric points only, into sets[0 .. kPyramidLevels), from the frame's (fused) depth;
+  // edges: the frame's level-0 Canny edges, already found when it became a keyframe.
+  void build_photometric(const FramePyramid& frame, const ImageU8& edges,
+                         FixedVector<TrackPoint>* sets);
   // Level-0 Canny edges of the last prepared frame.
   const ImageU8& edges() const { return edges_[0]; }
 
  private:
-  void prepare(const FramePyramid& frame);  // edges, gradients and thresholds of every level
+  // Edges, gradients and thresholds of every level; level-0 edges are detected unless given.
+  void prepare(const FramePyramid& frame, const ImageU8* edges = nullptr);
   void select_photometric(const FramePyramid& frame, const FramePyramid& depth, int level,
                           FixedVector<TrackPoint>* out);
   void select_geometric(const FramePyramid& frame, int level, FixedVector<TrackPoint>* out);

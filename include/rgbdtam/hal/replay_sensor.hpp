@@ -5,9 +5,9 @@
 // time is overwritten (newest kept) and counted as dropped, as is a frame the sensor thread
 // could not decode before the next one was due.
 //
-// Three frame slots rotate: the sensor thread fills one, one holds the newest published frame,
-// the tracker reads the third; a swap under a mutex is all either side ever waits for. A frame
-// that cannot be decoded is reported by next() as an error, never dropped silently.
+// Three frame slots rotate: the sensor thread decodes into one, one holds the newest published
+// frame, the tracker reads the third; a swap under a mutex is all either side ever waits for. A
+// frame that cannot be decoded is reported by next() as an error, never dropped silently.
 
 #include <atomic>
 #include <condition_variable>

@@ -38,6 +38,8 @@ class TumReplaySource : public SensorSource {
   Status open(const char* folder, int width, int height, int64_t max_rgb_depth_dt_ns,
               int64_t depth_time_offset_ns);
   Status next(SensorFrame* frame, Status* warning) override;
+  // The same, decoding into the caller's images (width x height) instead of the source's own.
+  Status next_into(ImageU8* gray, ImageU16* depth, SensorFrame* frame, Status* warning);
 
   int frame_count() const { return rgb_.size; }
   // The index of the frame next() delivers, and a jump forward to a later one.

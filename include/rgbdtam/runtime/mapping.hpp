@@ -77,6 +77,7 @@ class MappingModule {
     SeedMap seeds;
     ImageF gray;                  // the keyframe's level-0 image, for matching
     ImageF sensor_inverse_depth;  // the keyframe's own
+    ImageU8 edges;                // its Canny edges, from the tracker
     SE3 T_w_last_used;
     float median_depth_m = 1.f;
     int frames_used = 0;
