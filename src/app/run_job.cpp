@@ -50,14 +50,9 @@ Status load_board_and_params(const RunOptions& options, Board* board, Params* pa
   return Status::ok();
 }
 
-Status open_board_sensor(const Board& board, const Params& params, BoardSensor* sensor) {
+namespace {
+Status open_backend(const Board& board, const Params& params, BoardSensor* sensor) {
   const int w = params.camera.width_px, h = params.camera.height_px;
-  UsbId usb;
-  if (board.sensor_usb_id[0] != '\0' && parse_usb_id(board.sensor_usb_id, &usb)) {
-    char what[kTextBytes + 32];
-    std::snprintf(what, sizeof(what), "board '%s': sensor", board.name);
-    RGBDTAM_RETURN_IF_ERROR(require_usb_device(board.sysfs_root, usb, what));
-  }
   if (std::strcmp(board.sensor_kind, "replay") == 0) {
     RGBDTAM_RETURN_IF_ERROR(sensor->replay.open(board.sensor_device, w, h,
                                                 params.sensor.max_rgb_depth_dt_ns,
@@ -98,6 +93,26 @@ Status open_board_sensor(const Board& board, const Params& params, BoardSensor* 
   return Status::error(StatusCode::kInvalidArgument,
                        "board '%s': this build has no '%s' sensor backend (it has: %s)", board.name,
                        board.sensor_kind, RGBDTAM_HAL_BACKENDS);
+}
+}  // namespace
+
+Status open_board_sensor(const Board& board, const Params& params, BoardSensor* sensor) {
+  RecoveryConfig recovery;
+  if (board.sensor_usb_id[0] != '\0' && parse_usb_id(board.sensor_usb_id, &recovery.usb)) {
+    char what[kTextBytes + 32];
+    std::snprintf(what, sizeof(what), "board '%s': sensor", board.name);
+    RGBDTAM_RETURN_IF_ERROR(require_usb_device(board.sysfs_root, recovery.usb, what));
+    recovery.reset_usb = true;
+  }
+  RGBDTAM_RETURN_IF_ERROR(open_backend(board, params, sensor));
+  recovery.stall_ns = board.sensor_stall_ms * 1'000'000LL;
+  recovery.reopen_budget_ns = board.sensor_reopen_budget_ms * 1'000'000LL;
+  recovery.error_interval_ns = static_cast<int64_t>(1e9 / board.sensor_fps);
+  recovery.sysfs_root = board.sysfs_root;
+  recovery.devfs_root = board.devfs_root;
+  sensor->recovery.init(sensor->live, recovery, monotonic_ns, sleep_until_ns);
+  sensor->live = &sensor->recovery;
+  return Status::ok();
 }
 
 RunJob::~RunJob() { finish(); }
@@ -156,6 +171,11 @@ bool RunJob::step() {
   if (!warning.is_ok() && options_.progress) {
     std::fprintf(stderr, "rgbdtam run: %s\n", warning.message());
   }
+  const RecoveryCounters& recovery = sensor_.recovery.counters();
+  if (recovery.recoveries != recoveries_reported_) {
+    recoveries_reported_ = recovery.recoveries;
+    runtime_->on_sensor_recovered(recovery.last_recovery_ns);
+  }
   (void)runtime_->on_frame(frame, sensor_.live->arrival_ns());
   const int64_t now = monotonic_ns();
   if (options_.progress && now - last_progress_ns_ >= 1'000'000'000) {
@@ -192,6 +212,12 @@ void RunJob::print_summary() const {
       "(newest kept) %u\n",
       c.frames, seconds, seconds > 0 ? c.frames / seconds : 0.0, c.tracked, c.lost, c.sensor_errors,
       sensor_.live->dropped());
+  const RecoveryCounters& r = sensor_.recovery.counters();
+  std::printf(
+      "sensor recovery: %u stalls, %u USB resets (%u failed), %u reopens (%u failed), %u "
+      "recovered, longest outage %.0f ms\n",
+      r.stalls, r.usb_resets, r.usb_reset_failures, r.reopens, r.reopen_failures, r.recoveries,
+      r.max_recovery_ns * 1e-6);
   std::printf("cadence: %u deadline misses (deadline %.1f ms after arrival)\n", c.deadline_misses,
               1e3 / board_.sensor_fps);
   std::printf("tracker task ms: median %.2f, p95 %.2f, max %.2f\n", t.percentile_ms(0.5),

@@ -8,6 +8,7 @@
 
 #include "rgbdtam/hal/gpio.hpp"
 #include "rgbdtam/hal/replay_sensor.hpp"
+#include "rgbdtam/hal/sensor_recovery.hpp"
 #include "rgbdtam/hal/v4l2_source.hpp"
 #if RGBDTAM_WITH_FREENECT
 #include "rgbdtam/hal/freenect_source.hpp"
@@ -40,6 +41,7 @@ struct BoardSensor {
 #if RGBDTAM_WITH_FREENECT
   FreenectSource freenect;
 #endif
+  SensorRecovery recovery;  // wraps whichever backend is open
   LiveSensor* live = nullptr;
 };
 Status open_board_sensor(const Board& board, const Params& params, BoardSensor* sensor);
@@ -76,6 +78,7 @@ class RunJob {
   int64_t started_ns_ = 0;
   int64_t last_progress_ns_ = 0;
   int64_t wall_ns_ = 0;
+  uint32_t recoveries_reported_ = 0;
   bool finished_ = false;
 };
 

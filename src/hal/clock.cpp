@@ -1,5 +1,7 @@
 #include "rgbdtam/hal/clock.hpp"
 
+#include <errno.h>
+
 #include <ctime>
 
 namespace rgbdtam {
@@ -7,5 +9,12 @@ int64_t monotonic_ns() {
   timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
   return static_cast<int64_t>(ts.tv_sec) * 1'000'000'000LL + ts.tv_nsec;
+}
+
+void sleep_until_ns(int64_t deadline_ns) {
+  const timespec t{static_cast<time_t>(deadline_ns / 1'000'000'000),
+                   static_cast<long>(deadline_ns % 1'000'000'000)};
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &t, nullptr) == EINTR) {
+  }
 }
 }  // namespace rgbdtam

@@ -16,7 +16,10 @@ void video_callback(freenect_device* dev, void* data, uint32_t ticks) {
   static_cast<FreenectSource*>(freenect_get_user(dev))->on_video(data, ticks);
 }
 constexpr uint16_t kRawNoData = 2047;
-constexpr int kMaxEventsPerFrame = 64;  // event-loop turns before a missing partner is an error
+// A frame pair takes many USB transfers: the event loop turns until one is complete, for at
+// most this long (a silent device is then an error the stall recovery sees).
+constexpr int64_t kFrameTimeoutNs = 1'000'000'000;
+constexpr int kEventWaitUs = 50'000;
 }  // namespace
 
 uint16_t FreenectSource::raw_to_mm(uint16_t raw) {
@@ -35,6 +38,20 @@ Status FreenectSource::open(int device_index, FreenectDepth depth, uint32_t max_
   gray_.allocate(kWidth, kHeight);
   depth_.allocate(kWidth, kHeight);
   for (int raw = 0; raw < 2048; ++raw) raw_lut_[raw] = raw_to_mm(static_cast<uint16_t>(raw));
+  device_index_ = device_index;
+  return open_device();
+}
+
+Status FreenectSource::reopen() {
+  close();
+  const Status s = open_device();
+  if (!s.is_ok()) close();
+  return s;
+}
+
+Status FreenectSource::open_device() {
+  const int device_index = device_index_;
+  const FreenectDepth depth = depth_mode_;
   if (freenect_init(&ctx_, nullptr) < 0) {
     ctx_ = nullptr;
     return Status::error(StatusCode::kIoError, "libfreenect: cannot initialise (libusb)");
@@ -99,8 +116,9 @@ Status FreenectSource::next(SensorFrame* frame, Status* warning) {
   *warning = Status::ok();
   if (dev_ == nullptr) return Status::error(StatusCode::kIoError, "libfreenect: not open");
   have_depth_ = have_video_ = false;
-  for (int turn = 0; turn < kMaxEventsPerFrame; ++turn) {
-    if (freenect_process_events(ctx_) < 0) {
+  for (const int64_t deadline = monotonic_ns() + kFrameTimeoutNs; monotonic_ns() < deadline;) {
+    timeval wait{0, kEventWaitUs};  // libusb's own default would block for a minute
+    if (freenect_process_events_timeout(ctx_, &wait) < 0) {
       return Status::error(StatusCode::kEndOfStream, "libfreenect: the stream ended");
     }
     if (!have_depth_ || !have_video_) continue;
@@ -124,7 +142,9 @@ Status FreenectSource::next(SensorFrame* frame, Status* warning) {
     frame->height_px = kHeight;
     return Status::ok();
   }
-  return Status::error(StatusCode::kIoError, "libfreenect: no paired colour and depth frame");
+  return Status::error(StatusCode::kIoError,
+                       "libfreenect: no paired colour and depth frame for %lld ms",
+                       static_cast<long long>(kFrameTimeoutNs / 1'000'000));
 }
 
 void FreenectSource::close() {

@@ -1,21 +1,10 @@
 #include "rgbdtam/hal/replay_sensor.hpp"
 
-#include <errno.h>
-#include <time.h>
+#include <chrono>
 
 #include "rgbdtam/hal/clock.hpp"
 
 namespace rgbdtam {
-namespace {
-void sleep_until_ns(int64_t t_ns) {
-  timespec ts;
-  ts.tv_sec = static_cast<time_t>(t_ns / 1000000000);
-  ts.tv_nsec = static_cast<long>(t_ns % 1000000000);
-  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
-  }
-}
-}  // namespace
-
 ReplaySensor::~ReplaySensor() { stop(); }
 
 void ReplaySensor::open(TumReplaySource* source, int width, int height) {
@@ -86,8 +75,12 @@ void ReplaySensor::run() {
 Status ReplaySensor::next(SensorFrame* frame, Status* warning) {
   {
     std::unique_lock<std::mutex> lock(mutex_);
-    published_.wait(lock,
-                    [this] { return fresh_ || errors_pending_ > 0 || ended_ || stopping_.load(); });
+    // A gap in the recording is a silent sensor: it times out like the device backends.
+    if (!published_.wait_for(lock, std::chrono::milliseconds(kFrameTimeoutMs), [this] {
+          return fresh_ || errors_pending_ > 0 || ended_ || stopping_.load();
+        })) {
+      return Status::error(StatusCode::kIoError, "replay: no frame for %d ms", kFrameTimeoutMs);
+    }
     if (errors_pending_ > 0) {
       --errors_pending_;
       return error_;

@@ -211,10 +211,24 @@ Status V4l2Source::open(V4l2Io* io, const char* depth_path, const char* colour_p
   height_ = height;
   max_pair_dt_ns_ = max_pair_dt_ns;
   timeout_ms_ = timeout_ms;
+  io_ = io;
+  std::snprintf(depth_path_, sizeof(depth_path_), "%s", depth_path);
+  std::snprintf(colour_path_, sizeof(colour_path_), "%s", colour_path);
   gray_.allocate(width, height);
   depth_img_.allocate(width, height);
-  RGBDTAM_RETURN_IF_ERROR(depth_.open(io, depth_path, V4L2_PIX_FMT_Z16, width, height));
-  return colour_.open(io, colour_path, V4L2_PIX_FMT_YUYV, width, height);
+  return open_streams();
+}
+
+Status V4l2Source::open_streams() {
+  RGBDTAM_RETURN_IF_ERROR(depth_.open(io_, depth_path_, V4L2_PIX_FMT_Z16, width_, height_));
+  return colour_.open(io_, colour_path_, V4L2_PIX_FMT_YUYV, width_, height_);
+}
+
+Status V4l2Source::reopen() {
+  close();
+  const Status s = open_streams();
+  if (!s.is_ok()) close();  // half open is not open: the next attempt starts clean
+  return s;
 }
 
 Status V4l2Source::next(SensorFrame* frame, Status* warning) {

@@ -1,5 +1,6 @@
 #include "rgbdtam/runtime/firmware.hpp"
 
+#include <cstdio>
 #include <cstring>
 
 namespace rgbdtam {
@@ -84,6 +85,14 @@ void FirmwareRuntime::on_sensor_error(const Status& error, int64_t now_ns) {
   const size_t room = sizeof(text) - sizeof(kPrefix);
   std::memcpy(text + sizeof(kPrefix) - 1, error.message(), strnlen(error.message(), room));
   post_event(mavlink::kMavSeverityError, text);
+}
+
+void FirmwareRuntime::on_sensor_recovered(int64_t outage_ns) {
+  ++counters_.sensor_recoveries;
+  char text[51];
+  std::snprintf(text, sizeof(text), "sensor: frames again after %lld ms",
+                static_cast<long long>(outage_ns / 1'000'000));
+  post_event(mavlink::kMavSeverityInfo, text);
 }
 
 void FirmwareRuntime::stop() {

@@ -11,6 +11,7 @@
 #include <chrono>
 #include <thread>
 
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <sstream>
@@ -143,6 +144,62 @@ TEST(Firmware, SensorErrorsReachTheOperatorAsStatusTextAndAFaultBlink) {
   for (const std::string& t : monitor.texts) reported |= t.rfind("sensor: ", 0) == 0;
   EXPECT_TRUE(reported) << "no STATUSTEXT for the sensor error";
   EXPECT_GT(job.runtime().led().updates_in(LedState::kFault), 0u) << "the LED must show a fault";
+  EXPECT_EQ(monitor.odometry, static_cast<int>(c.frames));
+}
+
+// Shifts the recorded times of entries from `first` on by `seconds` in a TUM list file.
+void delay_entries(const std::string& list_path, int first, double seconds) {
+  std::ifstream in(list_path);
+  std::ostringstream out;
+  int entry = 0;
+  for (std::string line; std::getline(in, line);) {
+    if (!line.empty() && line[0] != '#') {
+      std::istringstream fields(line);
+      double stamp = 0;
+      std::string path;
+      fields >> stamp >> path;
+      char shifted[64];
+      std::snprintf(shifted, sizeof(shifted), "%.6f", stamp + (entry++ >= first ? seconds : 0));
+      line = std::string(shifted) + " " + path;
+    }
+    out << line << "\n";
+  }
+  ASSERT_TRUE(testing::write_text(list_path, out.str()));
+}
+
+TEST(Firmware, ASilentSensorIsReportedAsAStallAndItsReturnAsARecovery) {
+  testing::SyntheticScene scene = testing::SyntheticScene::half_resolution();
+  const std::string dir = testing::make_temp_dir("firmware_stall");
+  ASSERT_TRUE(testing::write_synthetic_sequence(dir, scene, 12, 10.0));
+  ASSERT_TRUE(testing::write_text(dir + "/camera.conf", testing::synthetic_config(scene)));
+  // The sensor goes silent for 2.6 s after frame 5.
+  delay_entries(dir + "/rgb.txt", 6, 2.5);
+  delay_entries(dir + "/depth.txt", 6, 2.5);
+  Monitor monitor;
+  RunJob job;
+  run_board(&monitor, &job,
+            {"sensor.device=" + dir, "sensor.config=" + dir + "/camera.conf", "sensor.fps=10"});
+  const FirmwareCounters& c = job.runtime().counters();
+  EXPECT_EQ(c.frames + job.sensor_dropped(), 12u) << "nothing lost to the stall";
+  EXPECT_EQ(c.sensor_recoveries, 1u);
+  int stalls = 0, recoveries = 0;
+  for (const std::string& t : monitor.texts) {
+    std::printf("STATUSTEXT: %s\n", t.c_str());
+    // A replay cannot be reopened: the attempt says so, then the frames come back by themselves.
+    if (t.rfind("sensor: stall ", 0) == 0) {
+      ++stalls;
+      EXPECT_NE(t.find("reopen failed"), std::string::npos) << t;
+    }
+    if (t.rfind("sensor: frames again after ", 0) == 0) {
+      ++recoveries;
+      const int outage_ms = std::atoi(t.c_str() + std::strlen("sensor: frames again after "));
+      EXPECT_GE(outage_ms, 2500) << t;
+      EXPECT_LE(outage_ms, 3500) << t;
+    }
+  }
+  EXPECT_GE(stalls, 1);
+  EXPECT_LE(stalls, 2) << "one attempt per stall period";
+  EXPECT_EQ(recoveries, 1);
   EXPECT_EQ(monitor.odometry, static_cast<int>(c.frames));
 }
 

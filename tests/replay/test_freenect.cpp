@@ -3,7 +3,6 @@
 // frames, values and device timestamps, and tracking through it must give the same trajectory
 // as the TUM replay of the same frames. Runs with LD_LIBRARY_PATH at fakenect (CMake sets it).
 #include <gtest/gtest.h>
-#include <sys/stat.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -12,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "fake_usb.hpp"
 #include "record_job.hpp"
 #include "rgbdtam/hal/freenect_source.hpp"
 #include "rgbdtam/hal/tum_replay_source.hpp"
@@ -105,6 +105,33 @@ TEST(Freenect, FakenectDumpFramesValuesAndTimestampsArriveExactly) {
     EXPECT_EQ(depth_mismatch, 0) << "frame " << f;
     EXPECT_EQ(out.depth[f], 0) << "2047 is no data";
   }
+}
+
+TEST(Freenect, AReopenedDeviceDeliversFramesAgain) {
+  const std::string dir = testing::make_temp_dir("fakenect_reopen");
+  std::vector<DumpFrame> frames(3);
+  for (int f = 0; f < 3; ++f) {
+    frames[f].gray.assign(kW * kH, static_cast<uint8_t>(10 * f + 1));
+    frames[f].raw.assign(kW * kH, static_cast<uint16_t>(600 + f));
+    frames[f].depth_ticks = 1000000u + 2000000u * static_cast<uint32_t>(f);
+    frames[f].video_ticks = frames[f].depth_ticks + 300;
+  }
+  write_dump(dir, frames);
+  std::unique_ptr<FreenectSource> source(open_dump(dir));
+  SensorFrame out;
+  Status warning;
+  ASSERT_TRUE(source->next(&out, &warning).is_ok());
+  const uint8_t* gray_buffer = out.gray;
+  // What the stall recovery does: the context shut down, the device opened and started again.
+  const Status reopened = source->reopen();
+  ASSERT_TRUE(reopened.is_ok()) << reopened.message();
+  const Status s = source->next(&out, &warning);
+  ASSERT_TRUE(s.is_ok()) << s.message();
+  EXPECT_EQ(out.gray, gray_buffer) << "the frame buffers stay";
+  // fakenect plays on from where it was, as a live device's stream would.
+  EXPECT_EQ(source->depth_device_timestamp(), frames[1].depth_ticks);
+  EXPECT_EQ(out.gray[0], frames[1].gray[0]);
+  EXPECT_EQ(out.depth[0], FreenectSource::raw_to_mm(frames[1].raw[0]));
 }
 
 TEST(Freenect, RawDisparityConversionFollowsTheOpenKinectModel) {
@@ -210,13 +237,7 @@ TEST(Freenect, RecordingAKinectThroughFakenectGivesItsFrames) {
       "threads.mapper_cpu=-1";  // 2 cores here
   // The board wants its Kinect on the USB bus: a fake sysfs shows one.
   const std::string sysfs = testing::make_temp_dir("fakenect_sysfs");
-  std::string dir = sysfs;
-  for (const char* part : {"/bus", "/usb", "/devices", "/1-1"}) {
-    dir += part;
-    ::mkdir(dir.c_str(), 0755);
-  }
-  ASSERT_TRUE(testing::write_text(dir + "/idVendor", "045e\n"));
-  ASSERT_TRUE(testing::write_text(dir + "/idProduct", "02ae\n"));
+  ASSERT_TRUE(testing::add_usb_device(sysfs, "1-1", "045e", "02ae", 1, 3));
   const std::string sysfs_override = "board.sysfs_root=" + sysfs;
   options.board_overrides[options.board_override_count++] = sysfs_override.c_str();
   options.max_frames = 4;

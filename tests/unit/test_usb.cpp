@@ -1,31 +1,19 @@
 // USB presence from sysfs: attached devices are listed, a board's sensor is found or refused
 // with what is attached instead. The tests build a fake sysfs tree.
 #include <gtest/gtest.h>
-#include <sys/stat.h>
 
 #include <string>
 
+#include "fake_usb.hpp"
 #include "rgbdtam/hal/usb_devices.hpp"
 #include "test_paths.hpp"
-#include "tum_writer.hpp"
 
 namespace rgbdtam {
 namespace {
 
-// root/bus/usb/devices/<name>/{idVendor,idProduct}, as the kernel lays it out.
 void add_device(const std::string& root, const std::string& name, const char* vendor,
                 const char* product) {
-  std::string dir = root;
-  for (const char* part : {"/bus", "/usb", "/devices"}) {
-    dir += part;
-    ::mkdir(dir.c_str(), 0755);
-  }
-  dir += "/" + name;
-  ::mkdir(dir.c_str(), 0755);
-  if (vendor != nullptr) {
-    ASSERT_TRUE(testing::write_text(dir + "/idVendor", std::string(vendor) + "\n"));
-    ASSERT_TRUE(testing::write_text(dir + "/idProduct", std::string(product) + "\n"));
-  }
+  ASSERT_TRUE(testing::add_usb_device(root, name, vendor, product));
 }
 
 TEST(Usb, ListsDevicesAndSkipsInterfaces) {
@@ -51,6 +39,27 @@ TEST(Usb, AnAbsentSensorIsRefusedWithWhatIsAttached) {
   const Status none = require_usb_device((root + "/missing").c_str(), {1, 2}, "sensor");
   ASSERT_FALSE(none.is_ok());
   EXPECT_NE(std::string(none.message()).find("cannot check"), std::string::npos);
+}
+
+TEST(Usb, AResetFindsTheDevicesUsbfsNodeAndReportsWhatTheKernelSaid) {
+  const std::string sysfs = testing::make_temp_dir("sysfs_reset");
+  const std::string devfs = testing::make_temp_dir("devfs_reset");
+  ASSERT_TRUE(testing::add_usb_device(sysfs, "usb1", "1d6b", "0002", 1, 1));
+  ASSERT_TRUE(testing::add_usb_device(sysfs, "1-1", "045e", "02ae", 1, 4));
+  char node[128] = "";
+  // No node in this devfs: the path it looked for is named.
+  Status s = reset_usb_device(sysfs.c_str(), devfs.c_str(), {0x045e, 0x02ae}, node, sizeof(node));
+  ASSERT_FALSE(s.is_ok());
+  EXPECT_EQ(std::string(node), devfs + "/bus/usb/001/004");
+  EXPECT_NE(std::string(s.message()).find(devfs + "/bus/usb/001/004"), std::string::npos);
+  // A node that is not a USB device refuses the ioctl; the error says it was the reset.
+  ASSERT_FALSE(testing::add_usbfs_node(devfs, 1, 4).empty());
+  s = reset_usb_device(sysfs.c_str(), devfs.c_str(), {0x045e, 0x02ae}, node, sizeof(node));
+  ASSERT_FALSE(s.is_ok());
+  EXPECT_NE(std::string(s.message()).find("USB reset:"), std::string::npos) << s.message();
+  s = reset_usb_device(sysfs.c_str(), devfs.c_str(), {0x2bc5, 0x0401}, node, sizeof(node));
+  ASSERT_FALSE(s.is_ok());
+  EXPECT_NE(std::string(s.message()).find("2bc5:0401 is not attached"), std::string::npos);
 }
 
 TEST(Usb, IdsParse) {

@@ -11,7 +11,10 @@
 #include <string>
 #include <vector>
 
+#include "fake_usb.hpp"
+#include "rgbdtam/hal/sensor_recovery.hpp"
 #include "rgbdtam/hal/v4l2_source.hpp"
+#include "test_paths.hpp"
 
 namespace rgbdtam {
 namespace {
@@ -34,6 +37,8 @@ class FakeV4l2 : public V4l2Io {
     std::vector<std::vector<uint8_t>> buffers;
     std::deque<int> queued;
     bool open = false;
+    bool wedged = false;  // delivers nothing until opened again
+    int opens = 0;
   };
   std::vector<Node> nodes;
   bool unplugged = false;
@@ -42,7 +47,7 @@ class FakeV4l2 : public V4l2Io {
   int64_t now_ns = 0;
 
   Node& add(const std::string& path, uint32_t fourcc) {
-    nodes.push_back({path, fourcc, {}, {}, {}, false});
+    nodes.push_back({path, fourcc, {}, {}, {}, false, false, 0});
     return nodes.back();
   }
   Node* node(int fd) {
@@ -50,9 +55,11 @@ class FakeV4l2 : public V4l2Io {
   }
 
   int open(const char* path, int) override {
-    for (size_t i = 0; i < nodes.size(); ++i) {
+    for (size_t i = 0; i < nodes.size() && !unplugged; ++i) {
       if (nodes[i].path == path) {
         nodes[i].open = true;
+        nodes[i].wedged = false;
+        ++nodes[i].opens;
         return static_cast<int>(i) + 3;
       }
     }
@@ -87,6 +94,7 @@ class FakeV4l2 : public V4l2Io {
       case VIDIOC_REQBUFS: {
         auto* r = static_cast<v4l2_requestbuffers*>(arg);
         r->count = 3;
+        n->queued.clear();
         n->buffers.assign(3, std::vector<uint8_t>(kW * kH * 2, 0));
         return 0;
       }
@@ -148,7 +156,7 @@ class FakeV4l2 : public V4l2Io {
   int poll(int fd, int timeout_ms) override {
     Node* n = node(fd);
     if (unplugged) return fail(ENODEV);
-    if (n == nullptr || n->script.empty()) {
+    if (n == nullptr || n->script.empty() || n->wedged) {
       now_ns += timeout_ms * 1000000LL;
       return 0;  // nothing scripted: a timeout
     }
@@ -293,6 +301,111 @@ TEST(V4l2, NoFramesIsATimeoutAndAMissingNodeIsNamed) {
   const Status m = missing.open(&io, "/dev/video7", "/dev/video8", kW, kH, 10 * kMs, 50);
   ASSERT_FALSE(m.is_ok());
   EXPECT_NE(std::string(m.message()).find("/dev/video7"), std::string::npos);
+}
+
+// Stall recovery on the fake's simulated clock: sleeping moves it forward.
+FakeV4l2* g_clock = nullptr;
+int64_t fake_now() { return g_clock->now_ns; }
+void fake_sleep_until(int64_t t) { g_clock->now_ns = t > g_clock->now_ns ? t : g_clock->now_ns; }
+
+struct RecoveryRig : Rig {
+  SensorRecovery recovery;
+  std::string sysfs = testing::make_temp_dir("sysfs_v4l2");
+  std::string devfs = testing::make_temp_dir("devfs_v4l2");
+  RecoveryRig() {
+    g_clock = &io;
+    RecoveryConfig config;  // 1 s stall, 3 s reopen budget, 100 ms between attempts
+    config.reset_usb = true;
+    config.usb = {0x2bc5, 0x0401};
+    config.sysfs_root = sysfs.c_str();
+    config.devfs_root = devfs.c_str();
+    EXPECT_TRUE(testing::add_usb_device(sysfs, "1-1", "2bc5", "0401", 1, 7));
+    EXPECT_FALSE(testing::add_usbfs_node(devfs, 1, 7).empty());
+    recovery.init(&source, config, fake_now, fake_sleep_until);
+  }
+  // Calls next() until a frame or `calls` errors; the errors' messages in order.
+  std::vector<std::string> until_frame(int calls, SensorFrame* f) {
+    std::vector<std::string> errors;
+    Status warning;
+    for (int i = 0; i < calls; ++i) {
+      const Status s = recovery.next(f, &warning);
+      if (s.is_ok()) break;
+      errors.emplace_back(s.message());
+    }
+    return errors;
+  }
+};
+
+TEST(V4l2Recovery, AWedgedStreamIsResetAndReopenedAndFramesFlowAgain) {
+  RecoveryRig rig;
+  ASSERT_TRUE(rig.open().is_ok());
+  ASSERT_TRUE(rig.recovery.start(ThreadPlacement()).is_ok());
+  rig.depth->script = {frame(1000, 1), frame(3000, 2)};
+  rig.colour->script = {frame(1000, 3), frame(3000, 4)};
+  SensorFrame f;
+  ASSERT_TRUE(rig.until_frame(1, &f).empty());
+  rig.depth->wedged = rig.colour->wedged = true;  // the driver stops filling buffers
+  const std::vector<std::string> errors = rig.until_frame(10, &f);
+  ASSERT_EQ(f.timestamp_ns, 3000 * kMs) << "frames flow again after the reopen";
+  // A 500 ms timeout, the stall (one reset-and-reopen, reported as such), and the reopened
+  // stream's wait for its first frame.
+  ASSERT_EQ(errors.size(), 3u);
+  EXPECT_NE(errors[0].find("no frame for 500 ms"), std::string::npos) << errors[0];
+  EXPECT_NE(errors[2].find("no frame for 500 ms"), std::string::npos) << errors[2];
+  EXPECT_EQ(errors[1].rfind("stall 1000 ms: stream reopened; USB reset failed (", 0), 0u)
+      << errors[1];
+  EXPECT_NE(errors[1].find(rig.devfs + "/bus/usb/001/007"), std::string::npos) << errors[1];
+  const RecoveryCounters& c = rig.recovery.counters();
+  EXPECT_EQ(c.stalls, 1u);
+  EXPECT_EQ(c.usb_reset_failures, 1u);  // a plain file is no USB device
+  EXPECT_EQ(c.reopens, 1u);
+  EXPECT_EQ(c.recoveries, 1u);
+  EXPECT_EQ(c.last_recovery_ns, 2000 * kMs) << "from the last frame to the first one after";
+  EXPECT_EQ(rig.depth->opens, 2);
+  EXPECT_EQ(rig.depth->queued.size(), 3u) << "the reopened stream has all its buffers";
+}
+
+TEST(V4l2Recovery, AnUnpluggedSensorIsRetriedAtABoundedPaceUntilItIsBack) {
+  RecoveryRig rig;
+  ASSERT_TRUE(rig.open().is_ok());
+  ASSERT_TRUE(rig.recovery.start(ThreadPlacement()).is_ok());
+  rig.depth->script = {frame(1000, 1), {Event::kUnplug, 1033 * kMs, 0}};
+  rig.colour->script = {frame(1000, 2), frame(1033, 3)};
+  SensorFrame f;
+  ASSERT_TRUE(rig.until_frame(1, &f).empty());
+  // Ten seconds unplugged: the dead device answers at once, yet errors come one frame period
+  // apart at most, and a reopen is tried once per stall period, each within its budget.
+  int reopen_failures = 0;
+  Status warning;
+  ASSERT_NE(std::string(rig.recovery.next(&f, &warning).message()).find("unplugged"),
+            std::string::npos);
+  int64_t previous_ns = rig.io.now_ns;
+  while (rig.io.now_ns < 11000 * kMs) {
+    const Status s = rig.recovery.next(&f, &warning);
+    ASSERT_FALSE(s.is_ok());
+    const int64_t step_ns = rig.io.now_ns - previous_ns;
+    previous_ns = rig.io.now_ns;
+    EXPECT_GE(step_ns, 33 * kMs);
+    EXPECT_LE(step_ns, 3100 * kMs) << "one call at most waits out the reopen budget";
+    if (std::string(s.message()).find("reopen failed") != std::string::npos) {
+      ++reopen_failures;
+      EXPECT_NE(std::string(s.message()).find("/dev/video0"), std::string::npos) << s.message();
+    }
+  }
+  EXPECT_GE(reopen_failures, 2);
+  EXPECT_LE(reopen_failures, 3) << "one attempt per stall period plus budget";
+  EXPECT_EQ(rig.recovery.counters().reopen_failures, static_cast<uint32_t>(reopen_failures));
+  // Plugged back in: the next attempt reopens it and frames flow.
+  rig.io.unplugged = false;
+  const int64_t back_ms = rig.io.now_ns / kMs + 100;
+  rig.depth->script = {frame(back_ms, 5)};
+  rig.colour->script = {frame(back_ms, 6)};
+  const int64_t replugged_ns = rig.io.now_ns;
+  ASSERT_LE(rig.until_frame(1000, &f).size(), 60u);
+  EXPECT_EQ(f.timestamp_ns, back_ms * kMs);
+  EXPECT_LE(rig.io.now_ns - replugged_ns, 1100 * kMs) << "back within one stall period";
+  EXPECT_EQ(rig.recovery.counters().reopens, 1u);
+  EXPECT_EQ(rig.recovery.counters().recoveries, 1u);
 }
 
 TEST(V4l2, TheRealDeviceWhenThereIsOne) {

@@ -4,4 +4,6 @@
 namespace rgbdtam {
 // CLOCK_MONOTONIC in nanoseconds.
 int64_t monotonic_ns();
+// Sleeps until monotonic_ns() reaches deadline_ns (at once when it has).
+void sleep_until_ns(int64_t deadline_ns);
 }  // namespace rgbdtam

@@ -35,6 +35,7 @@ class FreenectSource : public LiveSensor {
   void stop() override {}
   int64_t arrival_ns() const override { return arrival_ns_; }
   uint32_t dropped() const override { return dropped_; }
+  Status reopen() override;
   void close();
 
   // The device timestamps of the last frame next() delivered.
@@ -48,7 +49,10 @@ class FreenectSource : public LiveSensor {
   void on_video(const void* data, uint32_t ticks);
 
  private:
+  Status open_device();
+
   _freenect_context* ctx_ = nullptr;
+  int device_index_ = 0;
   _freenect_device* dev_ = nullptr;
   FreenectDepth depth_mode_ = FreenectDepth::kRegistered;
   uint32_t max_pair_ticks_ = 0;

@@ -22,11 +22,13 @@ namespace rgbdtam {
 
 class ReplaySensor : public LiveSensor {
  public:
+  static constexpr int kFrameTimeoutMs = 1000;
   ~ReplaySensor() override;
   // Init time: allocates the slots for the source's frames (width x height).
   void open(TumReplaySource* source, int width, int height);
   Status start(const ThreadPlacement& placement) override;
-  // Waits for a frame newer than the last one taken; kEndOfStream after the last.
+  // Waits for a frame newer than the last one taken (an error after kFrameTimeoutMs);
+  // kEndOfStream after the last.
   Status next(SensorFrame* frame, Status* warning) override;
   // When the frame last returned by next() was published by the sensor.
   int64_t arrival_ns() const override { return slots_[front_].arrival_ns; }

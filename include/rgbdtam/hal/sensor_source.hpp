@@ -27,6 +27,11 @@ class LiveSensor : public SensorSource {
   // When the frame last returned by next() arrived (CLOCK_MONOTONIC ns).
   virtual int64_t arrival_ns() const = 0;
   virtual uint32_t dropped() const = 0;
+  // Closes the stream and opens it again as first opened (after a stall or a USB reset), ready
+  // for next(); the frame buffers stay. Sensors that cannot stall say so.
+  virtual Status reopen() {
+    return Status::error(StatusCode::kInvalidArgument, "this sensor cannot be reopened");
+  }
 };
 
 }  // namespace rgbdtam

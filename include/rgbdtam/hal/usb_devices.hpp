@@ -3,6 +3,7 @@
 // idProduct), which needs no library and links statically. A board that declares its sensor's
 // USB id is refused at start-up when no such device is attached, with what is attached.
 
+#include <cstddef>
 #include <cstdint>
 
 #include "rgbdtam/core/fixed_vector.hpp"
@@ -20,6 +21,12 @@ bool parse_usb_id(const char* text, UsbId* id);
 
 // The attached devices (at most `out`'s capacity); sysfs_root is "/sys" on a board.
 Status list_usb_devices(const char* sysfs_root, FixedVector<UsbId>* out);
+
+// Resets the attached device `id` through usbfs (<devfs_root>/bus/usb/BBB/DDD, USBDEVFS_RESET,
+// the ioctl libusb_reset_device issues; done directly so the static firmware needs no libusb).
+// The kernel re-enumerates it and rebinds its drivers; node receives the usbfs path tried.
+Status reset_usb_device(const char* sysfs_root, const char* devfs_root, const UsbId& id, char* node,
+                        size_t node_size);
 
 // Ok when `wanted` is attached; else an error naming it and listing what is attached.
 Status require_usb_device(const char* sysfs_root, const UsbId& wanted, const char* what);

@@ -85,10 +85,16 @@ class V4l2Source : public LiveSensor {
   void stop() override {}
   int64_t arrival_ns() const override { return arrival_ns_; }
   uint32_t dropped() const override { return counters_.overtaken; }
+  // Both nodes closed and negotiated again (their buffers are the driver's: mapped anew).
+  Status reopen() override;
   const V4l2Counters& counters() const { return counters_; }
   void close();
 
  private:
+  Status open_streams();
+
+  V4l2Io* io_ = nullptr;
+  char depth_path_[128] = {}, colour_path_[128] = {};
   V4l2Stream depth_, colour_;
   ImageU8 gray_;
   ImageU16 depth_img_;

@@ -25,7 +25,10 @@ struct Board {
   char sensor_depth[kTextBytes] = "registered";  // freenect: registered (mm) or raw (11-bit)
   char sensor_usb_id[kTextBytes] = "";           // vvvv:pppp that must be attached; "" = none
   char sysfs_root[kTextBytes] = "/sys";          // where sysfs is mounted
+  char devfs_root[kTextBytes] = "/dev";          // where devtmpfs is (usbfs nodes for a reset)
   double sensor_fps = 30.0;
+  int sensor_stall_ms = 1000;          // no frame for this long: reset and reopen the sensor
+  int sensor_reopen_budget_ms = 3000;  // reopen attempts after a reset, within this time
 
   char link_kind[kTextBytes] = "";        // udp | serial
   char link_udp_remote[kTextBytes] = "";  // ip:port

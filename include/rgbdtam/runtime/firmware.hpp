@@ -25,7 +25,8 @@ struct FirmwareCounters {
   uint32_t lost = 0;
   uint32_t deadline_misses = 0;
   uint32_t sensor_errors = 0;
-  uint32_t status_texts = 0;  // events posted to the link
+  uint32_t sensor_recoveries = 0;  // frames flowing again after a stall
+  uint32_t status_texts = 0;       // events posted to the link
 };
 
 class FirmwareRuntime {
@@ -41,6 +42,8 @@ class FirmwareRuntime {
   PoseEstimate on_frame(const SensorFrame& frame, int64_t arrival_ns);
   // A frame the sensor could not deliver (its message goes to the link).
   void on_sensor_error(const Status& error, int64_t now_ns);
+  // Frames flow again after a stall of outage_ns (last frame to this one).
+  void on_sensor_recovered(int64_t outage_ns);
   // Lets the mapper and the link finish, and joins them.
   void stop();
 
