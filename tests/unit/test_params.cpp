@@ -1,8 +1,10 @@
 // Config files: the shipped ones load, and every kind of bad value is a clear error that
 // names the file and the key.
+#include <dirent.h>
 #include <gtest/gtest.h>
 
 #include <string>
+#include <vector>
 
 #include "rgbdtam/hal/file.hpp"
 #include "rgbdtam/runtime/params.hpp"
@@ -19,11 +21,19 @@ Status parse(const std::string& text, Params* p) {
   return parse_params(text.c_str(), "test.conf", p);
 }
 
-TEST(Params, ShippedConfigsLoad) {
-  for (const char* name : {"config/tum_fr1.conf", "config/tum_fr2.conf", "config/tum_fr3.conf",
-                           "config/kinect_v1.conf"}) {
+TEST(Params, EveryShippedConfigLoads) {
+  std::vector<std::string> names;
+  DIR* dir = ::opendir(testing::source_path("config").c_str());
+  ASSERT_NE(dir, nullptr);
+  while (const dirent* e = ::readdir(dir)) {
+    const std::string name = e->d_name;
+    if (name.size() > 5 && name.compare(name.size() - 5, 5, ".conf") == 0) names.push_back(name);
+  }
+  ::closedir(dir);
+  EXPECT_GE(names.size(), 5u);
+  for (const std::string& name : names) {
     char* text = nullptr;
-    const std::string path = testing::source_path(name);
+    const std::string path = testing::source_path("config/" + name);
     ASSERT_TRUE(read_text_file(path.c_str(), 1 << 20, &text).is_ok()) << path;
     Params p;
     const Status s = parse_params(text, path.c_str(), &p);
