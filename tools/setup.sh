@@ -21,8 +21,9 @@ if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 
 # python3-open3d: the map-export test opens the PLY with it (tools/check_map.py).
 # libfreenect-dev: the Kinect v1 backend of the dynamic build, and fakenect for its tests.
+# libopenni2-dev: the OpenNI2 backend of the dynamic build, and its Dummy device for tests.
 packages=(build-essential cmake libeigen3-dev libpng-dev zlib1g-dev libgpiod-dev googletest file
-  python3-open3d libfreenect-dev)
+  python3-open3d libfreenect-dev libopenni2-dev)
 if $aarch64; then packages+=(g++-aarch64-linux-gnu qemu-user); fi
 if $fuzz; then packages+=(clang); fi  # libFuzzer ships with Debian's clang
 

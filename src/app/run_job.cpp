@@ -1,5 +1,6 @@
 #include "run_job.hpp"
 
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -51,6 +52,9 @@ Status load_board_and_params(const RunOptions& options, Board* board, Params* pa
 }
 
 namespace {
+// How long a device backend waits for a frame before next() reports it (a stall is longer).
+constexpr int kFrameTimeoutMs = 1000;
+
 Status open_backend(const Board& board, const Params& params, BoardSensor* sensor) {
   const int w = params.camera.width_px, h = params.camera.height_px;
   if (std::strcmp(board.sensor_kind, "replay") == 0) {
@@ -72,9 +76,8 @@ Status open_backend(const Board& board, const Params& params, BoardSensor* senso
     }
     std::snprintf(depth, sizeof(depth), "%.*s", static_cast<int>(comma - board.sensor_device),
                   board.sensor_device);
-    constexpr int kTimeoutMs = 1000;
     RGBDTAM_RETURN_IF_ERROR(sensor->v4l2.open(&sensor->v4l2_io, depth, comma + 1, w, h,
-                                              params.sensor.max_rgb_depth_dt_ns, kTimeoutMs));
+                                              params.sensor.max_rgb_depth_dt_ns, kFrameTimeoutMs));
     sensor->live = &sensor->v4l2;
     return Status::ok();
   }
@@ -87,6 +90,15 @@ Status open_backend(const Board& board, const Params& params, BoardSensor* senso
     RGBDTAM_RETURN_IF_ERROR(
         sensor->freenect.open(std::atoi(board.sensor_device), mode, UINT32_MAX / 2));
     sensor->live = &sensor->freenect;
+    return Status::ok();
+  }
+#endif
+#if RGBDTAM_WITH_OPENNI2
+  if (std::strcmp(board.sensor_kind, "openni2") == 0) {
+    RGBDTAM_RETURN_IF_ERROR(sensor->openni2.open(
+        board.sensor_device, w, h, static_cast<int>(std::lround(board.sensor_fps)),
+        params.sensor.max_rgb_depth_dt_ns, kFrameTimeoutMs));
+    sensor->live = &sensor->openni2;
     return Status::ok();
   }
 #endif

@@ -13,6 +13,9 @@
 #if RGBDTAM_WITH_FREENECT
 #include "rgbdtam/hal/freenect_source.hpp"
 #endif
+#if RGBDTAM_WITH_OPENNI2
+#include "rgbdtam/hal/openni2_source.hpp"
+#endif
 #include "rgbdtam/runtime/firmware.hpp"
 
 namespace rgbdtam {
@@ -40,6 +43,9 @@ struct BoardSensor {
   V4l2Source v4l2;
 #if RGBDTAM_WITH_FREENECT
   FreenectSource freenect;
+#endif
+#if RGBDTAM_WITH_OPENNI2
+  OpenNi2Source openni2;
 #endif
   SensorRecovery recovery;  // wraps whichever backend is open
   LiveSensor* live = nullptr;

@@ -102,12 +102,7 @@ void FreenectSource::on_depth(const void* data, uint32_t ticks) {
 
 void FreenectSource::on_video(const void* data, uint32_t ticks) {
   if (have_video_) ++dropped_;
-  const auto* rgb = static_cast<const uint8_t*>(data);
-  uint8_t* out = gray_.data();
-  for (int i = 0; i < kWidth * kHeight; ++i, rgb += 3) {
-    // ITU-R BT.601 luma, rounded, as the PNG path converts colour.
-    out[i] = static_cast<uint8_t>((299 * rgb[0] + 587 * rgb[1] + 114 * rgb[2] + 500) / 1000);
-  }
+  rgb_to_gray(static_cast<const uint8_t*>(data), gray_.data(), kWidth * kHeight);
   colour_ticks_ = ticks;
   have_video_ = true;
 }

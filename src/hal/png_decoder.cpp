@@ -5,6 +5,8 @@
 #include <csetjmp>
 #include <cstring>
 
+#include "rgbdtam/core/image.hpp"
+
 namespace rgbdtam {
 namespace {
 
@@ -106,11 +108,7 @@ Status PngDecoder::decode(const uint8_t* data, size_t size, int width, int heigh
       continue;
     }
     png_read_row(png, row_.get(), nullptr);
-    const uint8_t* rgb = row_.get();
-    for (int x = 0; x < w; ++x, rgb += 3) {
-      // ITU-R BT.601 luma, rounded: the weights used for the benchmark's grey images.
-      dst[x] = static_cast<uint8_t>((299 * rgb[0] + 587 * rgb[1] + 114 * rgb[2] + 500) / 1000);
-    }
+    rgb_to_gray(row_.get(), dst, w);
   }
   png_destroy_read_struct(&png, &info, nullptr);
   return Status::ok();

@@ -59,4 +59,12 @@ inline float sample_bilinear(const ImageF& img, float x, float y) {
   return top + ay * (bottom - top);
 }
 
+// Packed 8-bit RGB to grey with ITU-R BT.601 luma, rounded: the weights of the benchmark's grey
+// images, so every colour source (PNG, Kinect, OpenNI2) gives the tracker the same grey.
+inline void rgb_to_gray(const uint8_t* rgb, uint8_t* gray, int pixels) {
+  for (int i = 0; i < pixels; ++i, rgb += 3) {
+    gray[i] = static_cast<uint8_t>((299 * rgb[0] + 587 * rgb[1] + 114 * rgb[2] + 500) / 1000);
+  }
+}
+
 }  // namespace rgbdtam
