@@ -9,9 +9,11 @@
 #include <initializer_list>
 #include <new>
 
+#include "fake_v4l2.hpp"
 #include "record_job.hpp"
 #include "replay_job.hpp"
 #include "rgbdtam/hal/file.hpp"
+#include "rgbdtam/hal/sensor_recovery.hpp"
 #include "rgbdtam/hal/udp_link.hpp"
 #include "run_job.hpp"
 #include "test_paths.hpp"
@@ -201,5 +203,59 @@ TEST(Allocations, NoneWhileRecordingAfterInit) {
               job.recorder().counters().written, g_calls.load());
 }
 
+}  // namespace
+}  // namespace rgbdtam
+
+namespace rgbdtam {
+namespace {
+testing::FakeV4l2* g_v4l2 = nullptr;
+int64_t v4l2_now() { return g_v4l2->now_ns; }
+void v4l2_sleep_until(int64_t t) { g_v4l2->now_ns = t > g_v4l2->now_ns ? t : g_v4l2->now_ns; }
+
+TEST(Allocations, NoneWhileAV4l2SensorDeliversSkipsAndTimesOut) {
+  // The V4L2 backend behind the stall recovery, on the scripted fake: paired frames, a buffer
+  // flagged as an error, EINTR, a tracker that fell behind, and a short silence (timeouts).
+  testing::FakeV4l2 io;
+  g_v4l2 = &io;
+  io.nodes.reserve(2);
+  testing::FakeV4l2::Node& depth = io.add("/dev/video0", V4L2_PIX_FMT_Z16);
+  testing::FakeV4l2::Node& colour = io.add("/dev/video1", V4L2_PIX_FMT_YUYV);
+  for (int i = 0; i < 60; ++i) {
+    const int64_t t_ms = 1000 + 33 * i + (i >= 40 ? 1200 : 0);  // silent for 1.2 s at frame 40
+    depth.script.push_back(testing::frame(t_ms, static_cast<uint8_t>(i)));
+    colour.script.push_back(testing::frame(t_ms + 1, static_cast<uint8_t>(i)));
+    if (i == 10) depth.script.push_back({testing::Event::kErrorFlag, (t_ms + 5) * 1'000'000, 0});
+    if (i == 20) colour.script.push_back({testing::Event::kEintr, (t_ms + 5) * 1'000'000, 0});
+  }
+  io.now_ns = 900 * testing::kMs;
+  V4l2Source source;
+  ASSERT_TRUE(
+      source
+          .open(&io, "/dev/video0", "/dev/video1", testing::kW, testing::kH, 10 * testing::kMs, 500)
+          .is_ok());
+  SensorRecovery recovery;
+  RecoveryConfig config;
+  config.stall_ns = 5'000'000'000;  // a reopen maps buffers anew: not part of streaming
+  recovery.init(&source, config, v4l2_now, v4l2_sleep_until);
+  ASSERT_TRUE(recovery.start(ThreadPlacement()).is_ok());
+  int frames = 0, errors = 0;
+  g_calls = 0;
+  g_bytes = 0;
+  g_armed = true;
+  for (int call = 0; call < 80 && (!depth.script.empty() || !colour.script.empty()); ++call) {
+    if (call == 30) io.now_ns += 100 * testing::kMs;  // the tracker fell behind
+    SensorFrame f;
+    Status warning;
+    recovery.next(&f, &warning).is_ok() ? ++frames : ++errors;
+  }
+  g_armed = false;
+  EXPECT_GT(frames, 50);
+  EXPECT_GE(errors, 2) << "the silence must be part of the counted run";
+  EXPECT_GT(source.counters().error_buffers + source.counters().retries, 1u);
+  EXPECT_GT(source.dropped(), 0u);
+  EXPECT_EQ(g_calls.load(), 0) << g_bytes.load() << " bytes allocated while streaming";
+  std::printf("v4l2 + recovery: %d frames, %d errors, %u dropped, %ld allocations\n", frames,
+              errors, source.dropped(), g_calls.load());
+}
 }  // namespace
 }  // namespace rgbdtam

@@ -1,17 +1,14 @@
 // The V4L2 backend against a scripted fake device: format negotiation and refusal, mmap
 // buffers, timestamps, depth/colour pairing, EINTR/EAGAIN, buffers flagged as errors and a
 // device unplugged mid-stream. Every scenario ends in frames or a clear error, never a hang.
-#include <errno.h>
 #include <gtest/gtest.h>
 #include <linux/videodev2.h>
-#include <sys/mman.h>
 
-#include <cstring>
-#include <deque>
 #include <string>
 #include <vector>
 
 #include "fake_usb.hpp"
+#include "fake_v4l2.hpp"
 #include "rgbdtam/hal/sensor_recovery.hpp"
 #include "rgbdtam/hal/v4l2_source.hpp"
 #include "test_paths.hpp"
@@ -19,157 +16,12 @@
 namespace rgbdtam {
 namespace {
 
-constexpr int kW = 16, kH = 8;
-constexpr int64_t kMs = 1000000;
-
-struct Event {
-  enum Kind { kFrame, kEintr, kEagain, kErrorFlag, kUnplug } kind = kFrame;
-  int64_t t_ns = 0;
-  uint8_t fill = 0;
-};
-
-class FakeV4l2 : public V4l2Io {
- public:
-  struct Node {
-    std::string path;
-    uint32_t fourcc;  // what the device offers
-    std::deque<Event> script;
-    std::vector<std::vector<uint8_t>> buffers;
-    std::deque<int> queued;
-    bool open = false;
-    bool wedged = false;  // delivers nothing until opened again
-    int opens = 0;
-  };
-  std::vector<Node> nodes;
-  bool unplugged = false;
-  // Simulated time: a scripted frame is visible once now_ns reaches its timestamp; waiting in
-  // poll() moves time forward (up to the timeout).
-  int64_t now_ns = 0;
-
-  Node& add(const std::string& path, uint32_t fourcc) {
-    nodes.push_back({path, fourcc, {}, {}, {}, false, false, 0});
-    return nodes.back();
-  }
-  Node* node(int fd) {
-    return fd >= 3 && fd - 3 < static_cast<int>(nodes.size()) ? &nodes[fd - 3] : nullptr;
-  }
-
-  int open(const char* path, int) override {
-    for (size_t i = 0; i < nodes.size() && !unplugged; ++i) {
-      if (nodes[i].path == path) {
-        nodes[i].open = true;
-        nodes[i].wedged = false;
-        ++nodes[i].opens;
-        return static_cast<int>(i) + 3;
-      }
-    }
-    errno = ENOENT;
-    return -1;
-  }
-  int close(int fd) override {
-    if (Node* n = node(fd)) n->open = false;
-    return 0;
-  }
-  int fail(int e) {
-    errno = e;
-    return -1;
-  }
-  int ioctl(int fd, unsigned long request, void* arg) override {
-    Node* n = node(fd);
-    if (n == nullptr) return fail(EBADF);
-    if (unplugged && request != VIDIOC_STREAMOFF) return fail(ENODEV);
-    switch (request) {
-      case VIDIOC_QUERYCAP: {
-        auto* cap = static_cast<v4l2_capability*>(arg);
-        cap->capabilities = V4L2_CAP_VIDEO_CAPTURE | V4L2_CAP_STREAMING;
-        return 0;
-      }
-      case VIDIOC_S_FMT: {
-        auto* f = static_cast<v4l2_format*>(arg);
-        f->fmt.pix.pixelformat = n->fourcc;  // the nearest it has
-        f->fmt.pix.width = kW;
-        f->fmt.pix.height = kH;
-        return 0;
-      }
-      case VIDIOC_REQBUFS: {
-        auto* r = static_cast<v4l2_requestbuffers*>(arg);
-        r->count = 3;
-        n->queued.clear();
-        n->buffers.assign(3, std::vector<uint8_t>(kW * kH * 2, 0));
-        return 0;
-      }
-      case VIDIOC_QUERYBUF: {
-        auto* b = static_cast<v4l2_buffer*>(arg);
-        b->length = kW * kH * 2;
-        b->m.offset = b->index * 4096;
-        return 0;
-      }
-      case VIDIOC_QBUF:
-        n->queued.push_back(static_cast<int>(static_cast<v4l2_buffer*>(arg)->index));
-        return 0;
-      case VIDIOC_STREAMON:
-      case VIDIOC_STREAMOFF:
-        return 0;
-      case VIDIOC_DQBUF: {
-        if (n->script.empty() || n->queued.empty() || n->script.front().t_ns > now_ns) {
-          return fail(EAGAIN);
-        }
-        const Event e = n->script.front();
-        n->script.pop_front();
-        if (e.kind == Event::kEintr) return fail(EINTR);
-        if (e.kind == Event::kEagain) return fail(EAGAIN);
-        if (e.kind == Event::kUnplug) {
-          unplugged = true;
-          return fail(ENODEV);
-        }
-        auto* b = static_cast<v4l2_buffer*>(arg);
-        b->index = static_cast<uint32_t>(n->queued.front());
-        n->queued.pop_front();
-        std::vector<uint8_t>& mem = n->buffers[b->index];
-        if (n->fourcc == V4L2_PIX_FMT_Z16) {
-          for (int i = 0; i < kW * kH; ++i) {
-            const uint16_t v = static_cast<uint16_t>(e.fill * 100 + i);
-            std::memcpy(&mem[2 * i], &v, 2);
-          }
-        } else {
-          for (int i = 0; i < kW * kH; ++i) {
-            mem[2 * i] = static_cast<uint8_t>(e.fill + i % 2);  // Y
-            mem[2 * i + 1] = 128;                               // U or V
-          }
-        }
-        b->bytesused = kW * kH * 2;
-        b->flags = e.kind == Event::kErrorFlag ? V4L2_BUF_FLAG_ERROR : 0;
-        b->timestamp.tv_sec = e.t_ns / 1000000000;
-        b->timestamp.tv_usec = (e.t_ns % 1000000000) / 1000;
-        return 0;
-      }
-      default:
-        return fail(EINVAL);
-    }
-  }
-  void* mmap(size_t, int fd, off_t offset) override {
-    Node* n = node(fd);
-    if (n == nullptr) return MAP_FAILED;
-    return n->buffers[static_cast<size_t>(offset / 4096)].data();
-  }
-  int munmap(void*, size_t) override { return 0; }
-  int poll(int fd, int timeout_ms) override {
-    Node* n = node(fd);
-    if (unplugged) return fail(ENODEV);
-    if (n == nullptr || n->script.empty() || n->wedged) {
-      now_ns += timeout_ms * 1000000LL;
-      return 0;  // nothing scripted: a timeout
-    }
-    const int64_t due = n->script.front().t_ns;
-    if (due <= now_ns) return 1;
-    if (due <= now_ns + timeout_ms * 1000000LL) {
-      now_ns = due;
-      return 1;
-    }
-    now_ns += timeout_ms * 1000000LL;
-    return 0;
-  }
-};
+using testing::Event;
+using testing::FakeV4l2;
+using testing::frame;
+using testing::kH;
+using testing::kMs;
+using testing::kW;
 
 struct Rig {
   FakeV4l2 io;
@@ -184,8 +36,6 @@ struct Rig {
   }
   Status open() { return source.open(&io, "/dev/video0", "/dev/video1", kW, kH, 10 * kMs, 500); }
 };
-
-Event frame(int64_t t_ms, uint8_t fill) { return {Event::kFrame, t_ms * kMs, fill}; }
 
 TEST(V4l2, DeliversPairedFramesWithTheirValuesAndTimestamps) {
   Rig rig;
