@@ -39,17 +39,10 @@ Status FreenectSource::open(int device_index, FreenectDepth depth, uint32_t max_
   depth_.allocate(kWidth, kHeight);
   for (int raw = 0; raw < 2048; ++raw) raw_lut_[raw] = raw_to_mm(static_cast<uint16_t>(raw));
   device_index_ = device_index;
-  return open_device();
+  return open_stream();
 }
 
-Status FreenectSource::reopen() {
-  close();
-  const Status s = open_device();
-  if (!s.is_ok()) close();
-  return s;
-}
-
-Status FreenectSource::open_device() {
+Status FreenectSource::open_stream() {
   const int device_index = device_index_;
   const FreenectDepth depth = depth_mode_;
   if (freenect_init(&ctx_, nullptr) < 0) {

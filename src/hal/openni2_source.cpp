@@ -80,10 +80,10 @@ Status OpenNi2Source::open(const char* uri, int width, int height, int fps, int6
   if (openni::OpenNI::initialize() != openni::STATUS_OK) {
     return Status::error(StatusCode::kIoError, "OpenNI2: cannot initialise: %s", last_error());
   }
-  return open_device();
+  return open_stream();
 }
 
-Status OpenNi2Source::open_device() {
+Status OpenNi2Source::open_stream() {
   const bool any = std::strcmp(uri_, "default") == 0;
   if (device_->open(any ? openni::ANY_DEVICE : uri_) != openni::STATUS_OK) {
     return Status::error(StatusCode::kNotFound, "OpenNI2: cannot open '%s': %s", uri_,
@@ -198,13 +198,6 @@ Status OpenNi2Source::next(SensorFrame* frame, Status* warning) {
         receive(ready, f.getData(), f.getDataSize(), f.getStrideInBytes(), f.getWidth(),
                 f.getHeight(), static_cast<int64_t>(f.getTimestamp()) * 1000, f.getFrameIndex()));
   }
-}
-
-Status OpenNi2Source::reopen() {
-  close();
-  const Status s = open_device();
-  if (!s.is_ok()) close();
-  return s;
 }
 
 void OpenNi2Source::close() {

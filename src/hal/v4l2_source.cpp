@@ -216,19 +216,12 @@ Status V4l2Source::open(V4l2Io* io, const char* depth_path, const char* colour_p
   std::snprintf(colour_path_, sizeof(colour_path_), "%s", colour_path);
   gray_.allocate(width, height);
   depth_img_.allocate(width, height);
-  return open_streams();
+  return open_stream();
 }
 
-Status V4l2Source::open_streams() {
+Status V4l2Source::open_stream() {
   RGBDTAM_RETURN_IF_ERROR(depth_.open(io_, depth_path_, V4L2_PIX_FMT_Z16, width_, height_));
   return colour_.open(io_, colour_path_, V4L2_PIX_FMT_YUYV, width_, height_);
-}
-
-Status V4l2Source::reopen() {
-  close();
-  const Status s = open_streams();
-  if (!s.is_ok()) close();  // half open is not open: the next attempt starts clean
-  return s;
 }
 
 Status V4l2Source::next(SensorFrame* frame, Status* warning) {

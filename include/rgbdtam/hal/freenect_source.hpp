@@ -35,7 +35,6 @@ class FreenectSource : public LiveSensor {
   void stop() override {}
   int64_t arrival_ns() const override { return arrival_ns_; }
   uint32_t dropped() const override { return dropped_; }
-  Status reopen() override;
   void close();
 
   // The device timestamps of the last frame next() delivered.
@@ -49,7 +48,8 @@ class FreenectSource : public LiveSensor {
   void on_video(const void* data, uint32_t ticks);
 
  private:
-  Status open_device();
+  Status open_stream() override;
+  void close_stream() override { close(); }
 
   _freenect_context* ctx_ = nullptr;
   int device_index_ = 0;

@@ -43,12 +43,12 @@ class OpenNi2Source : public LiveSensor {
   void stop() override {}
   int64_t arrival_ns() const override { return arrival_ns_; }
   uint32_t dropped() const override { return dropped_; }
-  Status reopen() override;
   void close();
   const OpenNi2Capabilities& capabilities() const { return capabilities_; }
 
  private:
-  Status open_device();
+  Status open_stream() override;
+  void close_stream() override { close(); }
   Status receive(int stream, const void* data, int bytes, int stride, int width, int height,
                  int64_t stamp_ns, int index);
 

@@ -28,10 +28,22 @@ class LiveSensor : public SensorSource {
   virtual int64_t arrival_ns() const = 0;
   virtual uint32_t dropped() const = 0;
   // Closes the stream and opens it again as first opened (after a stall or a USB reset), ready
-  // for next(); the frame buffers stay. Sensors that cannot stall say so.
-  virtual Status reopen() {
+  // for next(); the frame buffers stay. A failed attempt leaves it closed, so the next one
+  // starts clean.
+  Status reopen() {
+    close_stream();
+    const Status s = open_stream();
+    if (!s.is_ok()) close_stream();
+    return s;
+  }
+
+ protected:
+  // The device half of a backend's open and close, which reopen() repeats. Sensors that cannot
+  // stall keep these and say so.
+  virtual Status open_stream() {
     return Status::error(StatusCode::kInvalidArgument, "this sensor cannot be reopened");
   }
+  virtual void close_stream() {}
 };
 
 }  // namespace rgbdtam

@@ -85,13 +85,12 @@ class V4l2Source : public LiveSensor {
   void stop() override {}
   int64_t arrival_ns() const override { return arrival_ns_; }
   uint32_t dropped() const override { return counters_.overtaken; }
-  // Both nodes closed and negotiated again (their buffers are the driver's: mapped anew).
-  Status reopen() override;
   const V4l2Counters& counters() const { return counters_; }
   void close();
 
  private:
-  Status open_streams();
+  Status open_stream() override;
+  void close_stream() override { close(); }
 
   V4l2Io* io_ = nullptr;
   char depth_path_[128] = {}, colour_path_[128] = {};
