@@ -14,6 +14,7 @@ EvaluationReport evaluate_all(const std::vector<StampedPose>& gt,
   EvaluationReport r;
   r.ate_ok = evaluate_ate(gt, est, &r.ate);
   r.rpe_ok = evaluate_rpe(gt, est, 1.0, &r.rpe);
+  r.false_valid = evaluate_false_valid(gt, est);
   if (frame_stamps != nullptr) {
     r.coverage = evaluate_coverage(*frame_stamps, gt, est);
     r.has_coverage = true;
@@ -33,6 +34,12 @@ void print_report(const EvaluationReport& r, bool json, const char* label) {
       std::printf(", \"coverage\": %.4f, \"frames_with_gt\": %d, \"frames_estimated\": %d",
                   r.coverage.fraction(), r.coverage.frames, r.coverage.estimated);
     }
+    const FalseValidResult& f = r.false_valid;
+    std::printf(
+        ", \"false_valid\": %d, \"false_valid_checked\": %d, "
+        "\"false_valid_worst_trans_cm\": %.4f, \"false_valid_worst_rot_deg\": %.4f",
+        f.count, f.checked, f.worst_translation_m * 100, f.worst_rotation_deg);
+    if (f.count > 0) std::printf(", \"false_valid_first_stamp_s\": %.6f", f.first_stamp_s);
     std::printf("}\n");
     return;
   }
@@ -53,6 +60,15 @@ void print_report(const EvaluationReport& r, bool json, const char* label) {
     std::printf("coverage: %.1f %% (%d of %d frames with ground truth)\n",
                 100.0 * r.coverage.fraction(), r.coverage.estimated, r.coverage.frames);
   }
+  const FalseValidResult& f = r.false_valid;
+  const FalseValidLimits limits;
+  std::printf(
+      "false-valid (motion over %.1f s off by > %.0f cm or > %.0f deg): %d of %d poses checked; "
+      "worst %.2f cm, %.2f deg",
+      limits.window_s, limits.max_translation_m * 100, limits.max_rotation_deg, f.count, f.checked,
+      f.worst_translation_m * 100, f.worst_rotation_deg);
+  if (f.count > 0) std::printf("; first at %.6f s", f.first_stamp_s);
+  std::printf("\n");
 }
 
 int evaluate_command(int argc, char** argv) {

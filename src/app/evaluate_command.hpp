@@ -11,6 +11,7 @@ struct EvaluationReport {
   RpeResult rpe;
   Coverage coverage;
   bool has_coverage = false;
+  FalseValidResult false_valid;
 };
 
 EvaluationReport evaluate_all(const std::vector<StampedPose>& gt,

@@ -88,6 +88,10 @@ void ReplayJob::print_summary() const {
               source_.frame_count(), residuals);
   std::printf("frames: read %u, skipped %u, without depth %u; tracked %u, lost %u, resets %u\n",
               rc.delivered, rc.skipped, rc.without_depth, c.tracked, c.lost, c.resets);
+  std::printf(
+      "health: %u frames failed a first check; %u recovered from other initial guesses, %u "
+      "against the last valid frame; %u tracked on one term (the other did not fit)\n",
+      c.retried, c.recovered_by_guesses, c.recovered_by_last_frame, c.single_term);
   std::printf("keyframes: %u created, %u reused, pool %d of %d, %d recycled\n", c.keyframes,
               c.reused, system_.tracking().keyframes().size(),
               system_.tracking().keyframes().capacity(), system_.tracking().keyframes().recycled());
@@ -127,11 +131,16 @@ void ReplayJob::print_json(const EvaluationReport& r) const {
       "\"lost\": %u, \"keyframes\": %u, \"reused\": %u, \"track_median_ms\": %.3f, "
       "\"track_p95_ms\": %.3f, \"frame_median_ms\": %.3f, \"ate_ok\": %s, "
       "\"ate_rmse_cm\": %.4f, \"poses_compared\": %d, \"rpe_trans_cm_s\": %.4f, "
-      "\"rpe_rot_deg_s\": %.4f, \"coverage\": %.4f}\n",
+      "\"rpe_rot_deg_s\": %.4f, \"coverage\": %.4f, \"false_valid\": %d, "
+      "\"false_valid_checked\": %d, \"resets\": %u, \"track_max_ms\": %.3f, "
+      "\"retried\": %u, \"recovered_by_guesses\": %u, \"recovered_by_last_frame\": %u, "
+      "\"single_term\": %u}\n",
       options_.sequence, residuals, c.frames, c.tracked, c.lost, c.keyframes, c.reused,
       tracking_ms_.percentile_ms(0.5), tracking_ms_.percentile_ms(0.95),
       frame_ms_.percentile_ms(0.5), r.ate_ok ? "true" : "false", r.ate.rmse_m * 100, r.ate.compared,
-      r.rpe.trans_rmse_m * 100, r.rpe.rot_rmse_deg, r.has_coverage ? r.coverage.fraction() : 0.0);
+      r.rpe.trans_rmse_m * 100, r.rpe.rot_rmse_deg, r.has_coverage ? r.coverage.fraction() : 0.0,
+      r.false_valid.count, r.false_valid.checked, c.resets, tracking_ms_.max_ms(), c.retried,
+      c.recovered_by_guesses, c.recovered_by_last_frame, c.single_term);
 }
 
 }  // namespace rgbdtam

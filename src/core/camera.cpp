@@ -45,9 +45,16 @@ void Undistorter::init(const PinholeIntrinsics& k, const RadTanDistortion& d) {
       const bool inside = su >= 0.0 && sv >= 0.0 && su < width_ - 1 && sv < height_ - 1;
       if (inside) {
         const int x0 = static_cast<int>(su), y0 = static_cast<int>(sv);
-        taps_[i] = {y0 * width_ + x0, static_cast<float>(su - x0), static_cast<float>(sv - y0)};
+        const long ax = std::lround((su - x0) * kTapOne), ay = std::lround((sv - y0) * kTapOne);
+        auto w = [](long a, long b) { return static_cast<uint16_t>(a * b / kTapOne); };
+        BilinearTap& t = taps_[i];
+        t.index = y0 * width_ + x0;
+        t.w[1] = w(ax, kTapOne - ay);
+        t.w[2] = w(kTapOne - ax, ay);
+        t.w[3] = w(ax, ay);
+        t.w[0] = static_cast<uint16_t>(kTapOne - t.w[1] - t.w[2] - t.w[3]);  // sum exactly one
       } else {
-        taps_[i] = {-1, 0.f, 0.f};
+        taps_[i] = {-1, {0, 0, 0, 0}};
       }
       const long nu = std::lround(su), nv = std::lround(sv);
       nearest_[i] = (nu >= 0 && nv >= 0 && nu < width_ && nv < height_)
@@ -65,6 +72,8 @@ void Undistorter::undistort_gray(const uint8_t* raw, ImageF* out) const {
     for (int i = 0; i < n; ++i) dst[i] = raw[i] * kToUnit;
     return;
   }
+  // Integer weights (in 1/16384): fewer instructions than float, within 0.05 of a grey level.
+  constexpr float kTapToUnit = kToUnit / kTapOne;
   for (int i = 0; i < n; ++i) {
     const BilinearTap& t = taps_[i];
     if (t.index < 0) {
@@ -72,9 +81,8 @@ void Undistorter::undistort_gray(const uint8_t* raw, ImageF* out) const {
       continue;
     }
     const uint8_t* p = raw + t.index;
-    const float top = p[0] + t.ax * (p[1] - p[0]);
-    const float bottom = p[width_] + t.ax * (p[width_ + 1] - p[width_]);
-    dst[i] = (top + t.ay * (bottom - top)) * kToUnit;
+    const int32_t v = p[0] * t.w[0] + p[1] * t.w[1] + p[width_] * t.w[2] + p[width_ + 1] * t.w[3];
+    dst[i] = static_cast<float>(v) * kTapToUnit;
   }
 }
 

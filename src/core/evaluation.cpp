@@ -40,6 +40,18 @@ int find_closest_index(const std::vector<double>& list, double t) {
   }
   return best;
 }
+
+double max_gt_gap_s(const std::vector<double>& stamps_gt) {
+  std::vector<double> intervals;
+  for (size_t i = 1; i < stamps_gt.size(); ++i)
+    intervals.push_back(stamps_gt[i] - stamps_gt[i - 1]);
+  return 2.0 * median_of(intervals);
+}
+
+double rotation_angle_deg(const SE3& e) {
+  const double c = std::min(1.0, std::max(-1.0, (e.rotation().trace() - 1.0) / 2.0));
+  return std::acos(c) * 180.0 / M_PI;
+}
 }  // namespace
 
 std::vector<std::pair<int, int>> associate(const std::vector<double>& first,
@@ -129,10 +141,7 @@ bool evaluate_rpe(const std::vector<StampedPose>& gt, const std::vector<StampedP
     if (j != static_cast<int>(est.size()) - 1) pairs.emplace_back(i, j);
   }
   // The benchmark subsamples beyond 10000 pairs with Python's RNG; sequences here stay below.
-  std::vector<double> gt_intervals;
-  for (size_t i = 1; i < stamps_gt.size(); ++i)
-    gt_intervals.push_back(stamps_gt[i] - stamps_gt[i - 1]);
-  const double max_dt = 2.0 * median_of(gt_intervals);
+  const double max_dt = max_gt_gap_s(stamps_gt);
   std::vector<double> trans, rot;
   for (const auto& [i, j] : pairs) {
     const int g0 = find_closest_index(stamps_gt, stamps_est[i]);
@@ -146,8 +155,7 @@ bool evaluate_rpe(const std::vector<StampedPose>& gt, const std::vector<StampedP
     const SE3 d_gt = gt[g1].T_w_c.inverse() * gt[g0].T_w_c;
     const SE3 e = d_est.inverse() * d_gt;
     trans.push_back(e.translation().norm());
-    const double c = std::min(1.0, std::max(-1.0, (e.rotation().trace() - 1.0) / 2.0));
-    rot.push_back(std::acos(c) * 180.0 / M_PI);
+    rot.push_back(rotation_angle_deg(e));
   }
   if (trans.empty()) return false;
   auto rms = [](const std::vector<double>& v) {
@@ -190,6 +198,37 @@ Coverage evaluate_coverage(const std::vector<double>& frame_stamps,
     if (it != est_stamps.end() && std::fabs(*it - t) < 1e-6) ++c.estimated;
   }
   return c;
+}
+
+FalseValidResult evaluate_false_valid(const std::vector<StampedPose>& gt,
+                                      const std::vector<StampedPose>& est,
+                                      const FalseValidLimits& limits) {
+  FalseValidResult out;
+  if (gt.size() < 2 || est.size() < 2) return out;
+  const std::vector<double> stamps_gt = stamps_of(gt);
+  const double max_dt = max_gt_gap_s(stamps_gt);
+  auto gt_near = [&](double t) {
+    const int g = find_closest_index(stamps_gt, t);
+    return std::fabs(stamps_gt[g] - t) <= max_dt ? g : -1;
+  };
+  size_t j = 0;
+  for (size_t i = 1; i < est.size(); ++i) {
+    while (j < i && est[i].stamp_s - est[j].stamp_s > limits.window_s) ++j;
+    if (j == i) continue;  // nothing in the window, as after a gap
+    const int gi = gt_near(est[i].stamp_s), gj = gt_near(est[j].stamp_s);
+    if (gi < 0 || gj < 0) continue;
+    const SE3 d_est = est[i].T_w_c.inverse() * est[j].T_w_c;
+    const SE3 d_gt = gt[gi].T_w_c.inverse() * gt[gj].T_w_c;
+    const SE3 e = d_est.inverse() * d_gt;
+    const double trans = e.translation().norm(), rot = rotation_angle_deg(e);
+    ++out.checked;
+    out.worst_translation_m = std::max(out.worst_translation_m, trans);
+    out.worst_rotation_deg = std::max(out.worst_rotation_deg, rot);
+    if (trans > limits.max_translation_m || rot > limits.max_rotation_deg) {
+      if (out.count++ == 0) out.first_stamp_s = est[i].stamp_s;
+    }
+  }
+  return out;
 }
 
 }  // namespace rgbdtam

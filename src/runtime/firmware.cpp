@@ -49,7 +49,11 @@ PoseEstimate FirmwareRuntime::on_frame(const SensorFrame& frame, int64_t arrival
   // Events on transitions only, so that a long loss is one message, not one per frame.
   if ((pose.flags & kLost) != 0 && !lost_) {
     lost_ = true;
-    post_event(mavlink::kMavSeverityWarning, "rgbdtam: tracking lost");
+    // The checks the pose failed tell the operator why (STATUSTEXT holds 50 characters).
+    char reasons[64], text[80];
+    describe_health(pose.failed_checks, reasons, sizeof(reasons));
+    std::snprintf(text, sizeof(text), "rgbdtam: lost: %s", reasons);
+    post_event(mavlink::kMavSeverityWarning, text);
   } else if (valid && lost_) {
     lost_ = false;
     post_event(mavlink::kMavSeverityInfo, "rgbdtam: tracking regained");

@@ -90,6 +90,9 @@ Status assign(const KeySpec& spec, const char* value, const char* where, void* t
     case ValueType::kMillisecondsAsNs:
       *static_cast<int64_t*>(field) = static_cast<int64_t>(std::llround(v * 1e6));
       break;
+    case ValueType::kDegreesAsRadians:
+      *static_cast<double*>(field) = v * M_PI / 180.0;
+      break;
     default:
       break;
   }
@@ -182,6 +185,9 @@ void print_key_values(const KeyTable& table, void* target, char* buf, int size) 
         break;
       case ValueType::kReal:
         std::snprintf(value, sizeof(value), "%.9g", *static_cast<const double*>(f));
+        break;
+      case ValueType::kDegreesAsRadians:
+        std::snprintf(value, sizeof(value), "%.9g", *static_cast<const double*>(f) * 180.0 / M_PI);
         break;
       case ValueType::kFloat:
         std::snprintf(value, sizeof(value), "%g",

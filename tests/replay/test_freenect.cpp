@@ -209,7 +209,10 @@ TEST(Freenect, TrackingThroughTheBackendEqualsTheTumReplayOfTheSameFrames) {
     worst =
         std::max(worst, (through_freenect[f].inverse() * through_replay[f]).translation().norm());
   }
-  EXPECT_EQ(worst, 0.0) << "the same frames must give the same poses";
+  // The same frames, but not the same clock: the backend's stamps are device ticks in ns, whose
+  // intervals differ by rounding, and the motion model scales its velocity by them. That moves
+  // the poses by micrometres; a frame decoded differently would move them by millimetres.
+  EXPECT_LT(worst, 1e-4) << "the same frames must give the same poses";
   const SE3 last_truth = testing::SyntheticScene::pose_at(0.0).inverse() *
                          testing::SyntheticScene::pose_at((kFrames - 1) / 10.0);
   std::printf(

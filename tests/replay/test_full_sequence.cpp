@@ -1,8 +1,10 @@
-// The full fr1_xyz sequence (798 frames), where the machine has it: the accuracy the
-// tracking issue asks for. Skipped elsewhere, since the repository holds only a clip.
+// The full fr1_xyz sequence (798 frames) and the first 200 frames of the hand-held fr3_teddy,
+// where the machine has them: the accuracy and the honesty the tracking issues ask for.
+// Skipped elsewhere, since the repository holds only a clip.
 #include <gtest/gtest.h>
 
 #include "replay_runner.hpp"
+#include "stress_variants.hpp"
 #include "test_paths.hpp"
 
 namespace rgbdtam {
@@ -13,7 +15,9 @@ TEST(FullSequence, Fr1XyzAllFramesAteWithinOnePointFiveCentimetres) {
   if (seq.empty()) GTEST_SKIP() << "full fr1_xyz not present on this machine";
   const auto out = testing::replay_and_evaluate(seq, testing::source_path("config/tum_fr1.conf"));
   ASSERT_TRUE(out.ran);
+  // The health checks stay quiet on the easy sequence: nothing lost, nothing retried away.
   EXPECT_EQ(out.counters.lost, 0u);
+  EXPECT_EQ(out.report.false_valid.count, 0);
   EXPECT_DOUBLE_EQ(out.report.coverage.fraction(), 1.0);
   ASSERT_TRUE(out.report.ate_ok);
   EXPECT_LE(out.report.ate.rmse_m, 0.015);
@@ -22,21 +26,54 @@ TEST(FullSequence, Fr1XyzAllFramesAteWithinOnePointFiveCentimetres) {
               out.report.rpe.trans_rmse_m * 100, out.report.rpe.rot_rmse_deg);
 }
 
-// The mapping issue: the fused multi-view map must not cost accuracy (measured 0.84 cm with it,
-// 0.88 cm tracking on sensor depth alone).
+// The mapping issue: the fused multi-view map must not cost accuracy. One run against one is
+// a coin toss (a change that should not matter, such as a Canny threshold 0.5 higher, moves
+// either by up to 0.04 cm), so three runs each are compared by their means, within 0.03 cm.
+// Where the map matters, beyond the sensor's range, the synthetic far-wall test shows it.
 TEST(FullSequence, Fr1XyzMappingIsNoWorseThanTrackingAloneAndWithinOnePointTwoCentimetres) {
   const std::string seq = testing::full_fr1_xyz();
   if (seq.empty()) GTEST_SKIP() << "full fr1_xyz not present on this machine";
   const std::string config = testing::source_path("config/tum_fr1.conf");
-  const auto mapped = testing::replay_and_evaluate(seq, config, "map.enabled=true");
-  const auto alone = testing::replay_and_evaluate(seq, config, "map.enabled=false");
-  ASSERT_TRUE(mapped.ran && alone.ran);
-  ASSERT_TRUE(mapped.report.ate_ok && alone.report.ate_ok);
-  EXPECT_EQ(mapped.counters.lost, 0u);
-  EXPECT_LE(mapped.report.ate.rmse_m, 0.012);
-  EXPECT_LE(mapped.report.ate.rmse_m, alone.report.ate.rmse_m);
-  std::printf("fr1_xyz all-frames ATE: %.2f cm with mapping, %.2f cm without\n",
-              mapped.report.ate.rmse_m * 100, alone.report.ate.rmse_m * 100);
+  double mean_mapped = 0, mean_alone = 0;
+  for (const char* variant :
+       {"tracker.canny_low=20", "tracker.canny_low=20.5", "tracker.photometric_points=8980"}) {
+    const auto mapped = testing::replay_and_evaluate(seq, config, {"map.enabled=true", variant});
+    const auto alone = testing::replay_and_evaluate(seq, config, {"map.enabled=false", variant});
+    ASSERT_TRUE(mapped.ran && alone.ran);
+    ASSERT_TRUE(mapped.report.ate_ok && alone.report.ate_ok);
+    EXPECT_EQ(mapped.counters.lost, 0u);
+    EXPECT_LE(mapped.report.ate.rmse_m, 0.012) << variant;
+    mean_mapped += mapped.report.ate.rmse_m / 3;
+    mean_alone += alone.report.ate.rmse_m / 3;
+    std::printf("%s: all-frames ATE %.3f cm with mapping, %.3f cm without\n", variant,
+                mapped.report.ate.rmse_m * 100, alone.report.ate.rmse_m * 100);
+  }
+  EXPECT_LE(mean_mapped, mean_alone + 0.0003);
+}
+
+// The robust-tracking issue's development sequence: hand-held, fast, around a teddy bear.
+TEST(FullSequence, Fr3TeddyWithinOnePointFiveCentimetresAndNeverFalseValid) {
+  const std::string seq = testing::fr3_teddy_200();
+  if (seq.empty()) GTEST_SKIP() << "fr3_teddy_200 not present on this machine";
+  const auto out = testing::replay_and_evaluate(seq, testing::source_path("config/tum_fr3.conf"));
+  testing::expect_tracked_or_lost(out, "fr3_teddy_200", 0.95);
+  ASSERT_TRUE(out.report.ate_ok);
+  EXPECT_LE(out.report.ate.rmse_m, 0.015);
+}
+
+// Its stress variants: blurred along the true motion, and three times faster. Tracked or
+// reported lost, never a wrong pose reported as tracked.
+TEST(FullSequence, Fr3TeddyBlurredOrFasterIsNeverFalseValid) {
+  const std::string seq = testing::fr3_teddy_200();
+  if (seq.empty()) GTEST_SKIP() << "fr3_teddy_200 not present on this machine";
+  const std::string config = testing::source_path("config/tum_fr3.conf");
+  const std::string dir = testing::make_temp_dir("teddy_variants");
+  ASSERT_TRUE(testing::blur_sequence(seq, dir + "/blur", config, 30.0));
+  ASSERT_TRUE(testing::decimate_sequence(seq, dir + "/x3", 3));
+  for (const char* variant : {"/blur", "/x3"}) {
+    testing::expect_tracked_or_lost(testing::replay_and_evaluate(dir + variant, config),
+                                    std::string("fr3_teddy_200") + variant, 0.9);
+  }
 }
 
 }  // namespace

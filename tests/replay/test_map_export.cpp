@@ -18,7 +18,7 @@ TEST(MapExport, ClipMapOpensInOpen3dAndShowsTheDesk) {
   ASSERT_TRUE(ply.open(ply_path.c_str()).is_ok());
   const auto out = testing::replay_and_evaluate(testing::source_path("data/tum_fr1_xyz_clip"),
                                                 testing::source_path("config/tum_fr1.conf"),
-                                                "map.enabled=true", &ply);
+                                                {"map.enabled=true"}, &ply);
   ASSERT_TRUE(out.ran);
   ASSERT_TRUE(ply.close().is_ok());
   EXPECT_GT(ply.points(), 10000u);

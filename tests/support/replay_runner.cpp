@@ -1,12 +1,14 @@
 #include "replay_runner.hpp"
 
+#include <gtest/gtest.h>
+
 #include "rgbdtam/hal/file.hpp"
 #include "rgbdtam/hal/tum_trajectory.hpp"
 
 namespace rgbdtam::testing {
 
 ReplayOutcome replay_and_evaluate(const std::string& sequence, const std::string& config,
-                                  const char* override_assignment, MapSink* map_sink) {
+                                  std::initializer_list<const char*> overrides, MapSink* map_sink) {
   ReplayOutcome out;
   ReplayOptions opt;
   opt.map_sink = map_sink;
@@ -17,9 +19,8 @@ ReplayOutcome replay_and_evaluate(const std::string& sequence, const std::string
   const Status s = parse_params(text, config.c_str(), &opt.params);
   delete[] text;
   if (!s.is_ok()) return out;
-  if (override_assignment != nullptr &&
-      !set_param(override_assignment, "test", &opt.params).is_ok()) {
-    return out;
+  for (const char* o : overrides) {
+    if (!set_param(o, "test", &opt.params).is_ok()) return out;
   }
   ReplayJob job;
   if (!job.init(opt).is_ok()) return out;
@@ -38,6 +39,18 @@ ReplayOutcome replay_and_evaluate(const std::string& sequence, const std::string
   out.tracking_median_ms = job.tracking_time().percentile_ms(0.5);
   out.ran = true;
   return out;
+}
+
+void expect_tracked_or_lost(const ReplayOutcome& out, const std::string& label,
+                            double min_coverage) {
+  ASSERT_TRUE(out.ran) << label;
+  EXPECT_EQ(out.report.false_valid.count, 0) << label;
+  EXPECT_GT(out.report.false_valid.checked, 0) << label << ": nothing was checked";
+  EXPECT_GE(out.report.coverage.fraction(), min_coverage) << label;
+  std::printf("%s: ATE %.2f cm, coverage %.1f %%, %d of %d false-valid, %u lost, %u retried\n",
+              label.c_str(), out.report.ate.rmse_m * 100, 100 * out.report.coverage.fraction(),
+              out.report.false_valid.count, out.report.false_valid.checked, out.counters.lost,
+              out.counters.retried);
 }
 
 }  // namespace rgbdtam::testing

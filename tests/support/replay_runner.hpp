@@ -1,5 +1,6 @@
 #pragma once
 // Runs the replay job over a TUM folder with a shipped config and evaluates it.
+#include <initializer_list>
 #include <string>
 
 #include "evaluate_command.hpp"
@@ -15,7 +16,13 @@ struct ReplayOutcome {
 };
 
 ReplayOutcome replay_and_evaluate(const std::string& sequence, const std::string& config,
-                                  const char* override_assignment = nullptr,
+                                  std::initializer_list<const char*> overrides = {},
                                   MapSink* map_sink = nullptr);
+
+// The robust-tracking promise on a replayed sequence: every frame is tracked or reported lost,
+// never a wrong pose reported as tracked (false-valid), and at least min_coverage of the frames
+// with ground truth get a pose. Prints the figures under label.
+void expect_tracked_or_lost(const ReplayOutcome& out, const std::string& label,
+                            double min_coverage);
 
 }  // namespace rgbdtam::testing

@@ -11,12 +11,20 @@ std::string source_path(const std::string& relative) {
   return std::string(RGBDTAM_SOURCE_DIR) + "/" + relative;
 }
 
-std::string full_fr1_xyz() {
-  const char* env = std::getenv("RGBDTAM_TUM_FR1_XYZ");
-  const std::string path = env != nullptr ? env : RGBDTAM_TUM_FR1_XYZ;
+namespace {
+std::string if_sequence(const std::string& path) {
   struct stat st;
   return ::stat((path + "/rgb.txt").c_str(), &st) == 0 ? path : std::string();
 }
+std::string fr1_xyz_path() {
+  const char* env = std::getenv("RGBDTAM_TUM_FR1_XYZ");
+  return env != nullptr ? env : RGBDTAM_TUM_FR1_XYZ;
+}
+}  // namespace
+
+std::string full_fr1_xyz() { return if_sequence(fr1_xyz_path()); }
+
+std::string fr3_teddy_200() { return if_sequence(fr1_xyz_path() + "/../fr3_teddy_200"); }
 
 std::string make_temp_dir(const char* tag) {
   std::string pattern = std::string("/tmp/rgbdtam_") + tag + "_XXXXXX";

@@ -99,5 +99,50 @@ TEST(Coverage, CountsFramesWithGroundTruthOnly) {
   EXPECT_DOUBLE_EQ(c.fraction(), 31.0 / 61.0);
 }
 
+// A 100 Hz ground truth moving along z, and 25 Hz estimates of it: with a 0.5 s window, each
+// estimate i is compared with estimate i - 12.
+std::vector<StampedPose> line_at(double dt, int n) {
+  std::vector<StampedPose> out;
+  for (int i = 0; i < n; ++i)
+    out.push_back(
+        {5.0 + dt * i, SE3(Eigen::Quaterniond::Identity(), Vector3d(0, 0, 0.3 * dt * i))});
+  return out;
+}
+
+TEST(FalseValid, ExactCopyHasNoneAndAJumpCountsWhileInTheWindow) {
+  const auto gt = line_at(0.01, 500);
+  auto est = line_at(0.04, 100);
+  FalseValidResult r = evaluate_false_valid(gt, est);
+  EXPECT_EQ(r.checked, 99);
+  EXPECT_EQ(r.count, 0);
+  EXPECT_LT(r.worst_translation_m, 1e-9);
+  // A 12 cm jump at estimate 50: estimates 50..61 still see one from before it.
+  for (size_t i = 50; i < est.size(); ++i)
+    est[i].T_w_c =
+        SE3(est[i].T_w_c.quaternion(), est[i].T_w_c.translation() + Vector3d(0.12, 0, 0));
+  r = evaluate_false_valid(gt, est);
+  EXPECT_EQ(r.count, 12);
+  EXPECT_NEAR(r.worst_translation_m, 0.12, 1e-9);
+  EXPECT_DOUBLE_EQ(r.first_stamp_s, est[50].stamp_s);
+  // A 1 s gap: the estimate after it has nothing in its window and is not checked.
+  est.erase(est.begin() + 70, est.begin() + 95);
+  r = evaluate_false_valid(gt, est);
+  EXPECT_EQ(r.checked, 99 - 25 - 1);
+  EXPECT_EQ(r.count, 12);
+}
+
+TEST(FalseValid, RotationLimitIsFiveDegrees) {
+  const auto gt = line_at(0.01, 500);
+  for (const double deg : {4.0, 6.0}) {
+    auto est = line_at(0.04, 100);
+    const Eigen::Quaterniond turn = so3_exp(Vector3d(0, deg * M_PI / 180.0, 0));
+    for (size_t i = 30; i < est.size(); ++i)
+      est[i].T_w_c = SE3(turn * est[i].T_w_c.quaternion(), est[i].T_w_c.translation());
+    const FalseValidResult r = evaluate_false_valid(gt, est);
+    EXPECT_NEAR(r.worst_rotation_deg, deg, 1e-6);
+    EXPECT_EQ(r.count, deg > 5.0 ? 12 : 0);
+  }
+}
+
 }  // namespace
 }  // namespace rgbdtam

@@ -3,6 +3,7 @@
 #include <dirent.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -88,6 +89,26 @@ TEST(Params, BadValuesNameTheFileAndTheKey) {
   expect_error(std::string(kMinimal) + "camera.fx = nan\n", "is not a number");
   expect_error(std::string(kMinimal) + "map.enabled = true\nmap.keyframe_pool = 6\n",
                "'map.keyframe_pool'");
+}
+
+TEST(Params, HealthLimitsAreReadInTheirUnits) {
+  Params p;
+  ASSERT_TRUE(parse(std::string(kMinimal) +
+                        "health.max_rotation_rate = 180\nhealth.max_speed = 2\n"
+                        "health.max_rotation_std = 1\nhealth.reset_after_lost_ms = 250\n"
+                        "tracker.keyframe_parallax = 0.2\n",
+                    &p)
+                  .is_ok());
+  EXPECT_DOUBLE_EQ(p.health.max_rotation_rate_rad_s, M_PI);  // written in degrees per second
+  EXPECT_DOUBLE_EQ(p.health.max_rotation_std_rad, M_PI / 180.0);
+  EXPECT_EQ(p.health.max_speed_m_s, 2.0);
+  EXPECT_EQ(p.reset_after_lost_ns, 250'000'000);
+  EXPECT_EQ(p.tracker.keyframe_parallax, 0.2);
+  expect_error(std::string(kMinimal) + "health.min_inliers = 1.5\n", "out of range");
+  expect_error(std::string(kMinimal) + "health.max_speed = inf\n", "is not a number");
+  // Keys that were replaced are errors, not silently ignored.
+  expect_error(std::string(kMinimal) + "tracker.lost_frames_before_reset = 10\n",
+               "unknown key 'tracker.lost_frames_before_reset'");
 }
 
 TEST(Params, ErrorsGiveTheLineNumber) {

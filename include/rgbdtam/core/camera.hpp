@@ -45,9 +45,10 @@ class Undistorter {
   void undistort_depth(const uint16_t* raw, ImageU16* out) const;
 
  private:
+  static constexpr int kTapOne = 1 << 14;  // fixed-point 1 of the bilinear weights
   struct BilinearTap {
     int32_t index;  // top-left source pixel, or -1 when outside
-    float ax, ay;
+    uint16_t w[4];  // weights of the top-left, top-right, bottom-left, bottom-right pixels
   };
   std::unique_ptr<BilinearTap[]> taps_;
   std::unique_ptr<int32_t[]> nearest_;

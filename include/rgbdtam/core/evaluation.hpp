@@ -47,4 +47,22 @@ struct Coverage {
 Coverage evaluate_coverage(const std::vector<double>& frame_stamps,
                            const std::vector<StampedPose>& gt, const std::vector<StampedPose>& est);
 
+// False-valid poses (ours, not the benchmark's): pose i is checked against the earliest
+// estimate j within the preceding window; it is false-valid when the estimated motion from j to
+// i differs from the ground truth's by more than the limits, E = (P_i^-1 P_j)^-1 (Q_i^-1 Q_j).
+struct FalseValidLimits {
+  double window_s = 0.5;
+  double max_translation_m = 0.10;
+  double max_rotation_deg = 5.0;
+};
+struct FalseValidResult {
+  int checked = 0;  // poses with an earlier estimate in the window and ground truth at both
+  int count = 0;
+  double worst_translation_m = 0, worst_rotation_deg = 0;
+  double first_stamp_s = 0;  // of the first false-valid pose, when count > 0
+};
+FalseValidResult evaluate_false_valid(const std::vector<StampedPose>& gt,
+                                      const std::vector<StampedPose>& est,
+                                      const FalseValidLimits& limits = FalseValidLimits());
+
 }  // namespace rgbdtam

@@ -27,8 +27,14 @@ struct TrackerOptions {
   double min_relative_decrease = 1e-3;  // stop a level when the cost improves less than this
   double robust_c = 2.0;                // Geman-McClure scale, in standard deviations
   double geometric_weight = 1.0;        // lambda on the normalised geometric term
-  double inverse_depth_sigma = 0.0023;  // sigma_rho = sigma_d / (f b), 1/m
-  double keyframe_overlap = 0.85;       // new keyframe below this inlier overlap
+  double inverse_depth_sigma = 0.0023;  // sigma_rho = sigma_d / (f b), 1/m: the sensor model
+  // The geometric term's scale follows its residuals' spread down to this (the disparity's
+  // quantisation), 1/m.
+  double inverse_depth_sigma_floor = 0.0002;
+  // A new keyframe when less of the keyframe overlaps the frame (TrackResult::overlap) ...
+  double keyframe_overlap = 0.85;
+  // ... or when the camera has moved this fraction of the scene depth (the authors' code: 0.15).
+  double keyframe_parallax = 0.15;
   bool gain_brightness = true;
   bool motion_model = true;
 };
@@ -108,45 +114,94 @@ class KeyframeBuilder {
 
 enum class TrackingState : uint8_t { kOk = 0, kLost = 1 };
 
+// The residual terms a track uses (those that have data: points, sensor depth).
+enum TermMask : uint8_t {
+  kPhotometricTerm = 1,
+  kGeometricTerm = 2,
+  kAllTerms = kPhotometricTerm | kGeometricTerm,
+};
+
+// Photometric scales of healthy frames, per pyramid level (finest first); 0 = not known yet.
+struct ReferenceScales {
+  float photometric[kPyramidLevels] = {};
+};
+
+// The tracker's answer and what its health is judged by, all at the finest level and final pose.
 struct TrackResult {
-  SE3 T_k_c;  // keyframe from current camera
-  TrackingState state = TrackingState::kLost;
-  double overlap = 0.0;          // finest-level inlier fraction of the keyframe points
-  double photometric_sigma = 0;  // robust scale of the finest level, intensity units
+  SE3 T_k_c;                                   // keyframe from current camera
+  TrackingState state = TrackingState::kLost;  // kOk: enough residuals to constrain six DOF
+  uint8_t terms = 0;                           // TermMask of the terms the estimate used
+  double photometric_sigma = 0;                // robust scale of the finest level, intensity units
+  float level_sigma[kPyramidLevels] = {};      // ... and of every level, finest first
   double gain = 1.0, brightness = 0.0;
   int iterations = 0;
-  int residuals_used = 0;  // finest level, valid photometric + geometric
-  // Finest-level J^T W J of the perturbation delta in T_c_k exp(-delta), (v, omega).
+  int residuals_used = 0;  // valid photometric + geometric
+  // The keyframe's points that project into the image ...
+  double visible = 0.0;
+  // ... and of those, the fraction that still look as they did (the main term's inliers): the
+  // part of the keyframe the frame still sees as it was, the paper's overlap. The authors' code
+  // counts residuals below 0.2 in intensity; here the yardstick is the typical scale, which
+  // does not grow with the misfit as the adaptive one does.
+  double overlap = 0.0;
+  // The camera's translation over the depth of the keyframe's points, |t| / z (median): the
+  // angle their lines of sight turn through, the authors' "translational ratio".
+  double parallax = 0.0;
+  // Each used term's residual spread over the spread of what it compares (keyframe
+  // intensities, inverse depths): 0 for a perfect fit, about sqrt(2) against an unrelated image.
+  // Scale-free, so it needs no history. 0 when the term is unused or has no residuals.
+  double photometric_agreement = 0.0, geometric_agreement = 0.0;
+  // Fraction of each used term's valid residuals within 3 reference sigmas (1 without).
+  double photometric_inliers = 1.0, geometric_inliers = 1.0;
+  // One standard deviation of the pose along its worst direction, from the information.
+  double translation_std_m = 0.0, rotation_std_rad = 0.0;
+  // Finest-level J^T W J of the used terms, perturbation delta in T_c_k exp(-delta), (v, omega).
   Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
 };
 
 class Tracker {
  public:
   void allocate(const Keyframe& capacity_model, const TrackerOptions& opt);
-  TrackResult track(const Keyframe& kf, const FramePyramid& frame, const SE3& T_k_c_guess);
-  // The overlap at a given pose without optimising: one finest-level evaluation, cheap enough
+  // reference: the yardstick for inliers; the solver itself scales each term by its own
+  // residuals. terms: a subset of the configured residuals (a term without data is left
+  // out anyway).
+  TrackResult track(const Keyframe& kf, const FramePyramid& frame, const SE3& T_k_c_guess,
+                    const ReferenceScales& reference, uint8_t terms = kAllTerms);
+  // A wider basin: each guess is refined at the coarsest level, and the one whose points in
+  // view fit best at the reference scales is tracked through the pyramid.
+  TrackResult track_best(const Keyframe& kf, const FramePyramid& frame, const SE3* T_k_c_guesses,
+                         int count, const ReferenceScales& reference, uint8_t terms = kAllTerms);
+  // The visible fraction of the keyframe's points at a pose, without optimising: cheap enough
   // to rank several keyframes.
-  double overlap_at(const Keyframe& kf, const FramePyramid& frame, const SE3& T_k_c);
+  double visible_at(const Keyframe& kf, const FramePyramid& frame, const SE3& T_k_c);
 
  private:
   struct LevelCost {
-    double cost = 0.0;
+    double cost = 0.0;        // a point without a residual costs the kernel's maximum
+    double valid_cost = 0.0;  // the points with residuals only
     int valid = 0;
-    int inliers = 0;
     int total = 0;
     Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
     Vector6d g = Vector6d::Zero();
   };
   LevelCost evaluate_level(const Keyframe& kf, const FramePyramid& frame, int level,
                            const SE3& T_c_k, bool new_scale);
-  static double overlap_of(const Keyframe& kf, const LevelCost& finest);
+  const FixedVector<TrackPoint>& photometric_points(const Keyframe& kf, int level) const;
+  const FixedVector<TrackPoint>& geometric_points(const Keyframe& kf, const FramePyramid& frame,
+                                                  int level) const;
+  // Gauss-Newton on one level from T_c_k; the scratch buffers end at the returned pose.
+  LevelCost optimize_level(const Keyframe& kf, const FramePyramid& frame, int level, SE3* T_c_k,
+                           bool new_scale, int max_iterations, int* iterations);
+  void describe_fit(const Keyframe& kf, const FramePyramid& frame, const SE3& T_c_k,
+                    float reference_sigma, TrackResult* out);
+  void motion_stats(const Keyframe& kf, const FramePyramid& frame, const SE3& T_c_k,
+                    double* visible, double* parallax);
   void sample_photometric(const FixedVector<TrackPoint>& pts, const ImageF& img,
                           const PinholeIntrinsics& k, const SE3& T_c_k);
   void sample_geometric(const FixedVector<TrackPoint>& pts, const ImageF& inv_depth,
                         const PinholeIntrinsics& k, const SE3& T_c_k);
   void estimate_gain_brightness(const FixedVector<TrackPoint>& pts);
   float mad_sigma(int count);
-  void update_scales(int n_photometric, int n_geometric);
+  void update_scales(int level, int n_photometric, int n_geometric);
   LevelCost accumulate(const FixedVector<TrackPoint>& ph, const FixedVector<TrackPoint>& geo);
 
   TrackerOptions opt_;
@@ -155,7 +210,8 @@ class Tracker {
   FixedVector<float> ph_sample_, ph_residual_, geo_residual_, geo_sigma_,
       scratch_;  // scratch: max(ph, geo)
   float gain_ = 1.f, brightness_ = 0.f, ph_sigma_ = 0.05f;
-  float geo_scale_ = 1.f;  // >= 1: geometric spread in sensor standard deviations
+  float geo_scale_ = 1.f;      // geometric spread in sensor-model standard deviations
+  uint8_t terms_ = kAllTerms;  // of the current track
 };
 
 }  // namespace rgbdtam

@@ -16,6 +16,7 @@ enum class ValueType {
   kInt,               // int, whole numbers only
   kBool,              // true/false/1/0
   kMillisecondsAsNs,  // written in ms, stored as int64_t ns
+  kDegreesAsRadians,  // written in degrees, stored as double radians
   kText,              // char[kTextBytes]
   kCustom,            // parsed and printed by the spec's own functions
 };

@@ -40,10 +40,11 @@ struct PoseEstimate {
   uint32_t flags = 0;
   uint32_t keyframe_id = 0;
   uint32_t reset_counter = 0;
-  float overlap = 0.f;            // keyframe inlier overlap, [0,1]
+  float overlap = 0.f;            // keyframe points seen in this frame as they were, [0,1]
   float photometric_sigma = 0.f;  // intensity units [0,1]
   int32_t residuals_used = 0;
   int32_t iterations = 0;
+  uint32_t failed_checks = 0;  // HealthCheck bits of a frame reported lost
   // Finest-level J^T W J of the tracker's keyframe-side perturbation, (v, omega); zero when
   // the pose is not valid.
   Eigen::Matrix<double, 6, 6> information;

@@ -3,12 +3,14 @@
 // into an immutable struct. The table in params.cpp is the one schema: every key's type, range,
 // unit and meaning, used to validate, print and document. Defaults are the members' initialisers.
 
+#include <cmath>
 #include <cstdint>
 
 #include "rgbdtam/core/camera.hpp"
 #include "rgbdtam/core/pyramid.hpp"
 #include "rgbdtam/core/status.hpp"
 #include "rgbdtam/core/tracker.hpp"
+#include "rgbdtam/core/tracking_health.hpp"
 
 namespace rgbdtam {
 
@@ -18,10 +20,15 @@ struct SensorModel {
   double baseline_m = 0.075;                 // projector-camera baseline
   double depth_focal_px = 580.0;             // focal length of the IR camera
   double disparity_sigma_px = 0.4;           // effective disparity noise (see config/tum_fr1.conf)
+  double disparity_quantum_px = 0.125;       // the disparity's sub-pixel step (PrimeSense: 1/8)
   int64_t max_rgb_depth_dt_ns = 20'000'000;  // pair colour and depth within 20 ms
   int64_t depth_time_offset_ns = 0;  // pair colour at t with the depth stamped nearest t + offset
   // The paper's eq. for structured light: sigma_rho = sigma_d / (f b), constant in 1/m.
   double inverse_depth_sigma() const { return disparity_sigma_px / (depth_focal_px * baseline_m); }
+  // The standard deviation of a uniform quantisation step, in inverse depth.
+  double inverse_depth_quantum_sigma() const {
+    return disparity_quantum_px / std::sqrt(12.0) / (depth_focal_px * baseline_m);
+  }
 };
 
 struct Params {
@@ -31,12 +38,11 @@ struct Params {
   TrackerOptions tracker;
   int keyframe_pool_size = 32;
   int reuse_candidates = 2;  // nearest earlier keyframes tried before creating a new one
-  int lost_frames_before_reset = 10;
-  // Lost when the photometric scale exceeds this factor times its slow average over tracked
-  // frames (the authors compare squared errors with the previous frame's, 6x). A covered lens
-  // still "converges" on in-bounds residuals; its error scale gives it away (5.8x on the
-  // synthetic test). The largest ratio over fr1_xyz is 2.38.
-  double lost_sigma_ratio = 4.0;
+  HealthLimits health;       // what a pose must pass to be reported valid
+  // Lost this long, tracking restarts at the last valid pose (reset_counter + 1). Not sooner
+  // than the 0.5 s over which a consumer differences poses: the restart joins two stretches
+  // whose relative pose is unknown, and within that window it would read as motion.
+  int64_t reset_after_lost_ns = 500'000'000;
   // Multi-view mapping of each new keyframe (fr1_xyz all-frames ATE 0.84 cm with, 0.88 without).
   bool map_enabled = true;
   bool map_threaded = false;         // the mapper on its own thread (replay: synchronous)

@@ -1,6 +1,7 @@
 #pragma once
 // The tracking module: sensor frame -> frontend (undistortion, pyramids) -> tracker ->
-// keyframe decision -> pose estimate. Everything is sized in init(); process() never allocates.
+// health checks -> keyframe decision -> pose estimate. Everything is sized in init();
+// process() never allocates.
 // Thread: the caller's (replay: main thread; runtime: the tracking task).
 
 #include "rgbdtam/runtime/keyframe_pool.hpp"
@@ -20,6 +21,10 @@ struct TrackingCounters {
   uint32_t reused = 0;                    // keyframe switches that reused an earlier keyframe
   uint32_t mapper_dropped_frames = 0;     // the mapper queue was full
   uint32_t mapper_dropped_keyframes = 0;  // ... on a new keyframe: it keeps its sensor map
+  uint32_t single_term = 0;           // frames whose pose came from one term, the other not fitting
+  uint32_t retried = 0;               // frames whose first estimate failed a health check
+  uint32_t recovered_by_guesses = 0;  // ... and passed from another initial guess
+  uint32_t recovered_by_last_frame = 0;  // ... or against the last valid frame
 };
 
 class TrackingPipeline {
@@ -34,16 +39,35 @@ class TrackingPipeline {
   const Params& params() const { return params_; }
 
  private:
+  // A tracking result against one keyframe and the health checks it failed.
+  struct Attempt {
+    Keyframe* kf = nullptr;
+    TrackResult r;
+    uint32_t failed = ~0u;
+    SE3 T_w_c() const { return kf->T_w_k * r.T_k_c; }
+  };
+  FramePyramid& frame() { return frames_[current_]; }
+  Attempt track_against(Keyframe* kf, const SE3& T_w_guess, int64_t t_ns);
+  // The wider basin: several initial guesses screened at the coarsest level.
+  Attempt track_from_guesses(Keyframe* kf, int64_t t_ns);
+  Attempt without_misfit_term(const Attempt& a, int64_t t_ns);
+  uint32_t failed_checks(const TrackResult& r, const Keyframe& kf, int64_t t_ns) const;
+  SE3 predict_pose(int64_t t_ns) const;
+  Keyframe* keyframe_from_last_valid_frame();
+  void accept(const Attempt& a, const SensorFrame& frame, PoseEstimate* out);
+  void on_lost(const SensorFrame& frame, uint32_t failed, PoseEstimate* out);
   void start_keyframe(const SensorFrame& frame, const SE3& T_w_c, PoseEstimate* out);
-  SE3 predict_pose() const;
   void offer_to_mapper(const PoseEstimate& pose, bool new_keyframe);
   void propagate_map(const SE3& T_w_c);
   void adopt_map(Keyframe* kf);
-  bool reuse_keyframe(const SE3& T_w_c, PoseEstimate* out);
+  bool reuse_keyframe(const Attempt& current, int64_t t_ns, PoseEstimate* out);
 
   Params params_;
   Undistorter undistorter_;
-  FramePyramid pyramid_;
+  // The current frame and the last valid one, swapped when a frame is valid.
+  FramePyramid frames_[2];
+  int current_ = 0;
+  bool last_valid_frame_kept_ = false;  // frames_[1 - current_] is the frame of last_ns_
   FramePyramid propagated_;  // sensor depth plus the local maps (photometric points only)
   // The last two keyframe maps the tracker adopted (the authors' "local maps"), in the world.
   struct LocalMap {
@@ -57,13 +81,16 @@ class TrackingPipeline {
   KeyframePool pool_;
   Tracker tracker_;
   Keyframe* reference_ = nullptr;
+  Keyframe* fallback_ = nullptr;  // built from the last valid frame while tracking fails
   MapperQueue* mapper_queue_ = nullptr;
   uint32_t next_keyframe_id_ = 0;
-  // Last two valid poses for the constant-velocity prediction.
-  SE3 T_w_last_, T_w_before_last_;
-  int valid_history_ = 0;
-  int consecutive_lost_ = 0;
-  float typical_photometric_sigma_ = 0.f;  // slow average over tracked frames; 0 = none yet
+  // The last valid pose and the camera's twist (v, omega per second) before it.
+  SE3 T_w_last_;
+  int64_t last_ns_ = 0;
+  Vector6d velocity_ = Vector6d::Zero();
+  bool has_last_ = false;
+  bool previous_valid_ = false;  // the frame before this one was valid
+  ReferenceScales typical_;      // slow averages over healthy frames
   uint32_t reset_counter_ = 0;
   TrackingCounters counters_;
 };

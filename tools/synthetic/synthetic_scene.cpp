@@ -63,6 +63,15 @@ SE3 SyntheticScene::pose_at(double t) {
 }
 
 SE3 SyntheticScene::camera_at(double t) const {
+  if (pan_peak_deg_s > 0.0) {
+    constexpr double kYawAmplitude = 35.0 * M_PI / 180.0;
+    const double w = pan_peak_deg_s * M_PI / 180.0 / kYawAmplitude;  // peak = amplitude * w
+    const double yaw = kYawAmplitude * std::sin(w * t);
+    const double pitch = 0.25 * kYawAmplitude * std::sin(1.7 * w * t);
+    return SE3(
+        so3_exp(Vector3d(pitch, yaw, 0.0)),
+        Vector3d(0.03 * std::sin(2.3 * t), 0.02 * std::sin(3.1 * t), 0.02 * std::sin(1.9 * t)));
+  }
   if (!diagonal_path) return pose_at(t);
   return SE3(so3_exp(Vector3d(0.01 * std::sin(2 * t), 0.01 * std::sin(3 * t), 0.0)),
              Vector3d(0.45 * t, -0.45 * t, 0.05 * t));
@@ -119,11 +128,11 @@ SyntheticFrame SyntheticScene::render(const SE3& T_w_c) const {
 
 const std::vector<SyntheticFrame>& SyntheticScene::render_path(int frames, double fps) const {
   // Tests of one binary share the renders of one path.
-  using Key = std::tuple<int, int, double, bool, bool, bool, bool, double, double>;
+  using Key = std::tuple<int, int, double, bool, bool, bool, bool, double, double, double>;
   static std::map<Key, std::vector<SyntheticFrame>> cache;
   std::vector<SyntheticFrame>& out =
       cache[Key(camera.width_px, frames, fps, with_box, box_in_corner, with_room, diagonal_path,
-                back_wall_z_m, max_depth_m)];
+                back_wall_z_m, max_depth_m, pan_peak_deg_s)];
   while (static_cast<int>(out.size()) < frames) {
     out.push_back(render(camera_at(static_cast<double>(out.size()) / fps)));
   }

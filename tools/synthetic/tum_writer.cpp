@@ -75,7 +75,7 @@ bool write_synthetic_sequence(const std::string& dir, const SyntheticScene& scen
   const std::vector<SyntheticFrame>& rendered = scene.render_path(frames, fps);
   for (int i = 0; i < frames && ok; ++i) {
     const double t = i / fps;
-    const SE3 T_w_c = SyntheticScene::pose_at(t);
+    const SE3 T_w_c = scene.camera_at(t);
     const SyntheticFrame& f = rendered[static_cast<size_t>(i)];
     char rs[32], ds[32];
     stamp(t0 + t, rs, sizeof(rs));

@@ -48,8 +48,11 @@ struct SyntheticScene {
   // Smooth camera path: translation within ~10 cm and rotations within ~3 degrees.
   static SE3 pose_at(double t_s);
   // The camera of render_path(): pose_at, or with diagonal_path a steady 45 cm/s glide right
-  // and up (so both edge orientations have parallax) with a slight forward drift.
+  // and up (so both edge orientations have parallax) with a slight forward drift, or with
+  // pan_peak_deg_s > 0 a hand-held pan: yaw swinging +-35 degrees and a smaller pitch, peaking
+  // at that rate, over a few centimetres of jitter.
   bool diagonal_path = false;
+  double pan_peak_deg_s = 0.0;
   SE3 camera_at(double t_s) const;
   bool with_room = true;  // side walls and floor
   // The box in the first view's lower-left corner instead of near the centre: as the camera

@@ -1,0 +1,51 @@
+#pragma once
+// Whether a tracked pose may be reported as valid. Every check has a meaning of its own, so that
+// a limit can be set from what it means rather than from a sequence it happens to fit.
+
+#include <cstdint>
+
+#include "rgbdtam/core/tracker.hpp"
+
+namespace rgbdtam {
+
+struct HealthLimits {
+  int min_residuals = 100;
+  // A term fits when its residual spread over the spread of what it compares is below this (1:
+  // the alignment explains nothing; an unrelated image gives sqrt(2)) ...
+  double max_agreement = 1.0;
+  // ... and at least this fraction of its valid residuals is within 3 reference sigmas.
+  double min_inliers = 0.7;
+  // The photometric scale against its typical value over healthy frames.
+  double max_sigma_ratio = 4.0;
+  // One standard deviation along the worst direction: a tenth of the false-valid limits
+  // (10 cm, 5 degrees), beyond which the data do not determine the pose.
+  double max_translation_std_m = 0.01;
+  double max_rotation_std_rad = 0.5 * 3.14159265358979 / 180.0;
+  // Physical limits of the camera's motion since the last valid pose.
+  double max_speed_m_s = 3.0;
+  double max_rotation_rate_rad_s = 2.0 * 3.14159265358979;  // 360 deg/s
+};
+
+// One bit per failed check; 0 = healthy.
+enum HealthCheck : uint32_t {
+  kFewResiduals = 1u << 0,
+  kPhotometricMisfit = 1u << 1,  // a used term does not fit (agreement or inliers)
+  kGeometricMisfit = 1u << 2,
+  kCostAboveTypical = 1u << 3,  // the photometric scale jumped over its typical value
+  kIllConditioned = 1u << 4,    // the used terms do not determine the pose
+  kTooFast = 1u << 5,           // faster than the physical limits
+};
+
+struct HealthContext {
+  double typical_sigma = 0.0;  // photometric scale of healthy frames; 0 = not known yet
+  // The motion since the last valid pose, and the time it took; dt 0 = no earlier pose.
+  SE3 T_last_current;
+  double dt_s = 0.0;
+};
+
+uint32_t failed_health_checks(const TrackResult& r, const HealthContext& context,
+                              const HealthLimits& limits);
+// The names of the failed checks, comma-separated, into buf (for STATUSTEXT and logs).
+void describe_health(uint32_t failed, char* buf, int size);
+
+}  // namespace rgbdtam

@@ -1,0 +1,68 @@
+#include "rgbdtam/core/tracking_health.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+namespace rgbdtam {
+
+uint32_t failed_health_checks(const TrackResult& r, const HealthContext& context,
+                              const HealthLimits& limits) {
+  uint32_t failed = 0;
+  if (r.state != TrackingState::kOk || r.residuals_used < limits.min_residuals) {
+    failed |= kFewResiduals;
+  }
+  // A NaN anywhere fails its comparison the safe way: written as "not within the limit".
+  const bool photometric = (r.terms & kPhotometricTerm) != 0;
+  if (photometric && (!(r.photometric_agreement <= limits.max_agreement) ||
+                      !(r.photometric_inliers >= limits.min_inliers))) {
+    failed |= kPhotometricMisfit;
+  }
+  if ((r.terms & kGeometricTerm) != 0 && (!(r.geometric_agreement <= limits.max_agreement) ||
+                                          !(r.geometric_inliers >= limits.min_inliers))) {
+    failed |= kGeometricMisfit;
+  }
+  if (photometric && context.typical_sigma > 0.0 &&
+      !(r.photometric_sigma <= limits.max_sigma_ratio * context.typical_sigma)) {
+    failed |= kCostAboveTypical;
+  }
+  if (!(r.translation_std_m <= limits.max_translation_std_m) ||
+      !(r.rotation_std_rad <= limits.max_rotation_std_rad)) {
+    failed |= kIllConditioned;
+  }
+  if (context.dt_s > 0.0) {
+    const double speed = context.T_last_current.translation().norm() / context.dt_s;
+    const double rate = so3_log(context.T_last_current.quaternion()).norm() / context.dt_s;
+    if (!(speed <= limits.max_speed_m_s) || !(rate <= limits.max_rotation_rate_rad_s)) {
+      failed |= kTooFast;
+    }
+  }
+  if (!r.T_k_c.translation().allFinite() || !r.T_k_c.quaternion().coeffs().allFinite()) {
+    failed |= kFewResiduals;
+  }
+  return failed;
+}
+
+void describe_health(uint32_t failed, char* buf, int size) {
+  static constexpr struct {
+    uint32_t bit;
+    const char* name;
+  } kNames[] = {{kFewResiduals, "few residuals"},       {kPhotometricMisfit, "photometric misfit"},
+                {kGeometricMisfit, "geometric misfit"}, {kCostAboveTypical, "cost above typical"},
+                {kIllConditioned, "ill-conditioned"},   {kTooFast, "too fast"}};
+  if (size <= 0) return;
+  if (failed == 0) {
+    std::snprintf(buf, static_cast<size_t>(size), "healthy");
+    return;
+  }
+  buf[0] = '\0';
+  int used = 0;
+  for (const auto& n : kNames) {
+    if ((failed & n.bit) == 0) continue;
+    const int w = std::snprintf(buf + used, static_cast<size_t>(size - used), "%s%s",
+                                used > 0 ? ", " : "", n.name);
+    if (w < 0 || used + w >= size) break;  // truncated by snprintf, still terminated
+    used += w;
+  }
+}
+
+}  // namespace rgbdtam

@@ -1,0 +1,74 @@
+// Stress variants of TUM RGB-D sequences (tools/synthetic/stress_variants.hpp), for
+// tools/robustness.sh.
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "stress_variants.hpp"
+
+namespace {
+int usage() {
+  std::fprintf(stderr,
+               "usage:\n"
+               "  rgbdtam-stress decimate <in> <out> <n>\n"
+               "  rgbdtam-stress cut <in> <out> <first> <count>\n"
+               "  rgbdtam-stress kidnap <in> <out> <frame> <from-frame>\n"
+               "  rgbdtam-stress blur <in> <out> --config <file> --exposure-ms <ms>\n"
+               "  rgbdtam-stress drop-depth <in> <out> (--every <n> | --burst <length>/<period>)\n"
+               "  rgbdtam-stress pan <out> --peak-deg-s <deg/s> [--frames <n>] [--fps <hz>]\n");
+  return 2;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace rgbdtam::testing;
+  if (argc < 3) return usage();
+  const std::string verb = argv[1];
+  const char* config = nullptr;
+  double exposure_ms = 0, peak = 0, fps = 30;
+  int every = 0, burst = 0, period = 0, frames = 150;
+  std::vector<std::string> positional;
+  for (int i = 2; i < argc; ++i) {
+    const std::string a = argv[i];
+    const bool has = i + 1 < argc;
+    if (a == "--config" && has) {
+      config = argv[++i];
+    } else if (a == "--exposure-ms" && has) {
+      exposure_ms = std::atof(argv[++i]);
+    } else if (a == "--every" && has) {
+      every = std::atoi(argv[++i]);
+    } else if (a == "--burst" && has) {
+      if (std::sscanf(argv[++i], "%d/%d", &burst, &period) != 2) return usage();
+    } else if (a == "--peak-deg-s" && has) {
+      peak = std::atof(argv[++i]);
+    } else if (a == "--frames" && has) {
+      frames = std::atoi(argv[++i]);
+    } else if (a == "--fps" && has) {
+      fps = std::atof(argv[++i]);
+    } else if (a.rfind("--", 0) == 0) {
+      return usage();
+    } else {
+      positional.push_back(a);
+    }
+  }
+  bool ok;
+  if (verb == "decimate" && positional.size() == 3) {
+    ok = decimate_sequence(positional[0], positional[1], std::atoi(positional[2].c_str()));
+  } else if (verb == "cut" && positional.size() == 4) {
+    ok = cut_frames(positional[0], positional[1], std::atoi(positional[2].c_str()),
+                    std::atoi(positional[3].c_str()));
+  } else if (verb == "kidnap" && positional.size() == 4) {
+    ok = kidnap_frame(positional[0], positional[1], std::atoi(positional[2].c_str()),
+                      std::atoi(positional[3].c_str()));
+  } else if (verb == "blur" && positional.size() == 2 && config != nullptr) {
+    ok = blur_sequence(positional[0], positional[1], config, exposure_ms);
+  } else if (verb == "drop-depth" && positional.size() == 2) {
+    ok = drop_depth_frames(positional[0], positional[1], every, burst, period);
+  } else if (verb == "pan" && positional.size() == 1) {
+    ok = pan_sequence(positional[0], peak, frames, fps);
+  } else {
+    return usage();
+  }
+  return ok ? 0 : 1;
+}

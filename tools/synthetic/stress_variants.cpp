@@ -1,0 +1,369 @@
+#include "stress_variants.hpp"
+
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <climits>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "rgbdtam/hal/file.hpp"
+#include "rgbdtam/hal/tum_replay_source.hpp"
+#include "rgbdtam/hal/tum_trajectory.hpp"
+#include "rgbdtam/runtime/params.hpp"
+#include "synthetic_scene.hpp"
+#include "tum_writer.hpp"
+
+namespace rgbdtam::testing {
+namespace {
+
+bool fail(const std::string& what) {
+  std::fprintf(stderr, "stress variant: %s\n", what.c_str());
+  return false;
+}
+
+bool read_lines(const std::string& path, std::vector<std::string>* lines) {
+  std::ifstream in(path);
+  if (!in) return fail("cannot read " + path);
+  std::string line;
+  while (std::getline(in, line)) lines->push_back(line);
+  return true;
+}
+
+bool write_lines(const std::string& path, const std::vector<std::string>& lines) {
+  std::ofstream out(path);
+  for (const std::string& l : lines) out << l << '\n';
+  out.close();
+  return out ? true : fail("cannot write " + path);
+}
+
+bool is_data_line(const std::string& l) { return !l.empty() && l[0] != '#'; }
+
+// A new, empty output folder: never overwrite an earlier variant.
+bool create_folder(const std::string& out) {
+  if (::mkdir(out.c_str(), 0755) != 0) {
+    return fail("cannot create " + out + ": " + std::strerror(errno) + " (it must not exist)");
+  }
+  return true;
+}
+
+// ... for a readable input, so that nothing is left behind for one that is not a sequence.
+bool make_output(const std::string& in, const std::string& out) {
+  for (const char* list : {"rgb.txt", "depth.txt", "groundtruth.txt"}) {
+    const std::string path = in + "/" + list;
+    if (::access(path.c_str(), R_OK) != 0) return fail("cannot read " + path);
+  }
+  return create_folder(out);
+}
+
+bool link_into(const std::string& in, const std::string& out, const char* name) {
+  char real[PATH_MAX];
+  const std::string src = in + "/" + name;
+  if (::realpath(src.c_str(), real) == nullptr) return fail("missing " + src);
+  const std::string dst = out + "/" + name;
+  if (::symlink(real, dst.c_str()) != 0) return fail("cannot link " + dst);
+  return true;
+}
+
+bool copy_file(const std::string& in, const std::string& out, const char* name, bool required) {
+  std::vector<std::string> lines;
+  const std::string src = in + "/" + name;
+  if (::access(src.c_str(), R_OK) != 0) return required ? fail("missing " + src) : true;
+  return read_lines(src, &lines) && write_lines(out + "/" + name, lines);
+}
+
+// Keeps the data lines of a list for which keep(index among data lines) holds.
+template <typename Keep>
+bool filter_list(const std::string& in, const std::string& out, const char* name, Keep keep,
+                 const std::string& note) {
+  std::vector<std::string> lines, kept = {"# " + note};
+  if (!read_lines(in + "/" + name, &lines)) return false;
+  int index = 0;
+  for (const std::string& l : lines) {
+    if (!is_data_line(l) || keep(index++)) kept.push_back(l);
+  }
+  return write_lines(out + "/" + name, kept);
+}
+
+}  // namespace
+
+namespace {
+// A variant that differs from its input in one list (rgb.txt or depth.txt), filtered by keep;
+// images are linked, the other lists copied.
+template <typename Keep>
+bool filtered_variant(const std::string& in, const std::string& out, const char* list, Keep keep,
+                      const std::string& note) {
+  const char* other = std::string(list) == "rgb.txt" ? "depth.txt" : "rgb.txt";
+  return make_output(in, out) && filter_list(in, out, list, keep, note) &&
+         copy_file(in, out, other, true) && copy_file(in, out, "groundtruth.txt", true) &&
+         copy_file(in, out, "calib.txt", false) && link_into(in, out, "rgb") &&
+         link_into(in, out, "depth");
+}
+}  // namespace
+
+bool decimate_sequence(const std::string& in, const std::string& out, int n) {
+  if (n < 1) return fail("decimate: n must be at least 1");
+  return filtered_variant(
+      in, out, "rgb.txt", [n](int i) { return i % n == 0; },
+      "every " + std::to_string(n) + "-th colour frame of " + in);
+}
+
+bool cut_frames(const std::string& in, const std::string& out, int first, int count) {
+  if (first < 0 || count < 1) return fail("cut: needs a first frame >= 0 and a count >= 1");
+  return filtered_variant(
+      in, out, "rgb.txt", [first, count](int i) { return i < first || i >= first + count; },
+      std::to_string(count) + " colour frames cut from frame " + std::to_string(first) + " of " +
+          in);
+}
+
+namespace {
+// Index of the data line whose stamp is nearest t, or -1.
+int nearest_line(const std::vector<std::string>& lines, double t) {
+  int best = -1;
+  double best_dt = 0.0;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    if (!is_data_line(lines[i])) continue;
+    const double dt = std::fabs(std::atof(lines[i].c_str()) - t);
+    if (best < 0 || dt < best_dt) {
+      best = static_cast<int>(i);
+      best_dt = dt;
+    }
+  }
+  return best;
+}
+
+// The file name of a `stamp file` list line.
+std::string file_of(const std::string& line) { return line.substr(line.find_last_of(" \t") + 1); }
+std::string stamp_of(const std::string& line) { return line.substr(0, line.find_first_of(" \t")); }
+}  // namespace
+
+bool kidnap_frame(const std::string& in, const std::string& out, int frame, int from) {
+  std::vector<std::string> rgb, depth;
+  if (!read_lines(in + "/rgb.txt", &rgb) || !read_lines(in + "/depth.txt", &depth)) return false;
+  std::vector<int> data;
+  for (size_t i = 0; i < rgb.size(); ++i) {
+    if (is_data_line(rgb[i])) data.push_back(static_cast<int>(i));
+  }
+  const int n = static_cast<int>(data.size());
+  if (frame < 0 || from < 0 || frame >= n || from >= n || frame == from) {
+    return fail("kidnap: frames must be two different ones of the " + std::to_string(n));
+  }
+  std::string& target = rgb[static_cast<size_t>(data[static_cast<size_t>(frame)])];
+  const std::string& source = rgb[static_cast<size_t>(data[static_cast<size_t>(from)])];
+  const int d_target = nearest_line(depth, std::atof(target.c_str()));
+  const int d_source = nearest_line(depth, std::atof(source.c_str()));
+  if (d_target < 0 || d_source < 0) return fail("kidnap: no depth frames in " + in);
+  depth[static_cast<size_t>(d_target)] = stamp_of(depth[static_cast<size_t>(d_target)]) + " " +
+                                         file_of(depth[static_cast<size_t>(d_source)]);
+  target = stamp_of(target) + " " + file_of(source);
+  const std::string note =
+      "# frame " + std::to_string(frame) + " shows frame " + std::to_string(from) + " of " + in;
+  rgb.insert(rgb.begin(), note);
+  depth.insert(depth.begin(), note);
+  return make_output(in, out) && write_lines(out + "/rgb.txt", rgb) &&
+         write_lines(out + "/depth.txt", depth) && copy_file(in, out, "groundtruth.txt", true) &&
+         copy_file(in, out, "calib.txt", false) && link_into(in, out, "rgb") &&
+         link_into(in, out, "depth");
+}
+
+bool drop_depth_frames(const std::string& in, const std::string& out, int every, int burst,
+                       int period) {
+  if (every < 2 && (burst < 1 || period <= burst)) return fail("drop-depth: nothing to drop");
+  auto dropped = [=](int i) { return every > 1 ? i % every == every - 1 : i % period < burst; };
+  const std::string note = every > 1 ? "every " + std::to_string(every) + "-th depth frame dropped"
+                                     : std::to_string(burst) + " of every " +
+                                           std::to_string(period) + " depth frames dropped";
+  return filtered_variant(
+      in, out, "depth.txt", [&](int i) { return !dropped(i); }, note);
+}
+
+namespace {
+// The ground-truth pose at any instant its samples bracket closely (linear position, slerp).
+class Trajectory {
+ public:
+  explicit Trajectory(std::vector<StampedPose> poses) : poses_(std::move(poses)) {
+    std::vector<double> gaps;
+    for (size_t i = 1; i < poses_.size(); ++i)
+      gaps.push_back(poses_[i].stamp_s - poses_[i - 1].stamp_s);
+    std::sort(gaps.begin(), gaps.end());
+    max_gap_s_ = gaps.empty() ? 0.0 : 2.0 * gaps[gaps.size() / 2];
+  }
+  bool at(double t, SE3* T) const {
+    auto it = std::lower_bound(poses_.begin(), poses_.end(), t,
+                               [](const StampedPose& p, double s) { return p.stamp_s < s; });
+    if (it == poses_.begin() || it == poses_.end()) return false;
+    const StampedPose& b = *it;
+    const StampedPose& a = *(it - 1);
+    if (b.stamp_s - a.stamp_s > max_gap_s_) return false;
+    const double f = (t - a.stamp_s) / (b.stamp_s - a.stamp_s);
+    *T = SE3(a.T_w_c.quaternion().slerp(f, b.T_w_c.quaternion()),
+             (1 - f) * a.T_w_c.translation() + f * b.T_w_c.translation());
+    return true;
+  }
+
+ private:
+  std::vector<StampedPose> poses_;
+  double max_gap_s_ = 0.0;
+};
+
+float sample_clamped(const ImageU8& img, double u, double v) {
+  u = std::clamp(u, 0.0, img.width() - 1.001);
+  v = std::clamp(v, 0.0, img.height() - 1.001);
+  const int x = static_cast<int>(u), y = static_cast<int>(v);
+  const double fx = u - x, fy = v - y;
+  const uint8_t* r0 = img.row(y) + x;
+  const uint8_t* r1 = img.row(y + 1) + x;
+  return static_cast<float>((1 - fy) * ((1 - fx) * r0[0] + fx * r0[1]) +
+                            fy * ((1 - fx) * r1[0] + fx * r1[1]));
+}
+
+// The frame blurred over the exposure; false when the ground truth does not cover it.
+bool blur_frame(const ImageU8& gray, const ImageU16* depth, const Params& p,
+                const Trajectory& truth, double t, double exposure_s, std::vector<uint8_t>* out) {
+  SE3 T_w_t, first, last;
+  if (!truth.at(t, &T_w_t) || !truth.at(t - exposure_s / 2, &first) ||
+      !truth.at(t + exposure_s / 2, &last)) {
+    return false;
+  }
+  const int w = gray.width(), h = gray.height();
+  const PinholeIntrinsics& k = p.camera;
+  std::vector<float> depth_m(static_cast<size_t>(w) * h, 0.f);
+  std::vector<float> valid;
+  for (int y = 0; y < h && depth != nullptr; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const float d = static_cast<float>(depth->at(x, y) / p.sensor.depth_factor);
+      depth_m[static_cast<size_t>(y) * w + x] = d;
+      if (d > 0.f) valid.push_back(d);
+    }
+  }
+  float median = 1.5f;  // a desk scene, when the frame has no depth at all
+  if (!valid.empty()) {
+    std::nth_element(valid.begin(), valid.begin() + valid.size() / 2, valid.end());
+    median = valid[valid.size() / 2];
+  }
+  // Enough samples that consecutive ones move a pixel at most, probed at the median depth.
+  const SE3 across = first.inverse() * last;
+  double spread_px = 0.0;
+  for (const auto& [u, v] : {std::pair<double, double>{0, 0},
+                             {w - 1.0, 0},
+                             {0, h - 1.0},
+                             {w - 1.0, h - 1.0},
+                             {w / 2.0, h / 2.0}}) {
+    const Vector3d X = median * Vector3d((u - k.cx_px) / k.fx_px, (v - k.cy_px) / k.fy_px, 1.0);
+    const Vector3d Y = across * X;
+    spread_px = std::max(spread_px, std::hypot(k.fx_px * Y.x() / Y.z() + k.cx_px - u,
+                                               k.fy_px * Y.y() / Y.z() + k.cy_px - v));
+  }
+  const int samples = std::clamp(static_cast<int>(std::ceil(spread_px)) + 1, 1, 64);
+  std::vector<float> sum(static_cast<size_t>(w) * h, 0.f);
+  for (int s = 0; s < samples; ++s) {
+    SE3 T_w_s;
+    (void)truth.at(t - exposure_s / 2 + exposure_s * (s + 0.5) / samples, &T_w_s);
+    const SE3 T_t_s = T_w_t.inverse() * T_w_s;
+    const Matrix3d R = T_t_s.rotation();
+    const Vector3d tr = T_t_s.translation();
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        const size_t i = static_cast<size_t>(y) * w + x;
+        const double d = depth_m[i] > 0.f ? depth_m[i] : median;
+        const Vector3d X = d * Vector3d((x - k.cx_px) / k.fx_px, (y - k.cy_px) / k.fy_px, 1.0);
+        const Vector3d Y = R * X + tr;
+        if (Y.z() <= 0.05) {
+          sum[i] += gray.at(x, y);
+          continue;
+        }
+        sum[i] += sample_clamped(gray, k.fx_px * Y.x() / Y.z() + k.cx_px,
+                                 k.fy_px * Y.y() / Y.z() + k.cy_px);
+      }
+    }
+  }
+  out->resize(sum.size());
+  for (size_t i = 0; i < sum.size(); ++i)
+    (*out)[i] = static_cast<uint8_t>(std::clamp(std::lround(sum[i] / samples), 0L, 255L));
+  return true;
+}
+
+}  // namespace
+
+bool blur_sequence(const std::string& in, const std::string& out, const std::string& config,
+                   double exposure_ms) {
+  if (!(exposure_ms > 0.0)) return fail("blur: the exposure must be positive");
+  char* text = nullptr;
+  Params p;
+  Status s = read_text_file(config.c_str(), 1 << 20, &text);
+  if (s.is_ok()) s = parse_params(text, config.c_str(), &p);
+  delete[] text;
+  if (!s.is_ok()) return fail(s.message());
+  std::vector<StampedPose> gt;
+  int bad = 0;
+  s = read_tum_trajectory((in + "/groundtruth.txt").c_str(), &gt, &bad);
+  if (!s.is_ok()) return fail(s.message());
+  const Trajectory truth(gt);
+  TumReplaySource source;
+  s = source.open(in.c_str(), p.camera.width_px, p.camera.height_px, p.sensor.max_rgb_depth_dt_ns,
+                  p.sensor.depth_time_offset_ns);
+  if (!s.is_ok()) return fail(s.message());
+  if (!make_output(in, out) || ::mkdir((out + "/rgb").c_str(), 0755) != 0 ||
+      !copy_file(in, out, "depth.txt", true) || !copy_file(in, out, "groundtruth.txt", true) ||
+      !copy_file(in, out, "calib.txt", false) || !link_into(in, out, "depth")) {
+    return false;
+  }
+  std::vector<std::string> rgb_lines = {"# colour frames of " + in + " blurred over " +
+                                        std::to_string(exposure_ms) + " ms of their motion"};
+  ImageU8 gray;
+  ImageU16 depth;
+  gray.allocate(p.camera.width_px, p.camera.height_px);
+  depth.allocate(p.camera.width_px, p.camera.height_px);
+  std::vector<uint8_t> blurred;
+  int written = 0, sharp = 0;
+  for (;;) {
+    SensorFrame frame;
+    Status warning;
+    s = source.next_into(&gray, &depth, &frame, &warning);
+    if (s.code() == StatusCode::kEndOfStream) break;
+    if (!s.is_ok()) continue;  // unreadable in the original too: left out
+    const TumListEntry& e = source.rgb_list().entries[source.position() - 1];
+    const double t = static_cast<double>(e.timestamp_ns) * 1e-9;
+    const bool moved = blur_frame(gray, frame.depth != nullptr ? &depth : nullptr, p, truth, t,
+                                  exposure_ms * 1e-3, &blurred);
+    if (!moved) ++sharp;  // no ground truth around it: kept as recorded
+    const uint8_t* pixels = moved ? blurred.data() : gray.data();
+    const std::string name = std::string("rgb/") + std::to_string(written) + ".png";
+    if (!write_png_gray8(out + "/" + name, gray.width(), gray.height(), pixels)) {
+      return fail("cannot write " + out + "/" + name);
+    }
+    char stamp[32];
+    std::snprintf(stamp, sizeof(stamp), "%.6f", t);
+    rgb_lines.push_back(std::string(stamp) + " " + name);
+    ++written;
+  }
+  if (!write_lines(out + "/rgb.txt", rgb_lines)) return false;
+  std::printf("%s: %d frames, %d blurred over %.1f ms, %d without ground truth kept sharp\n",
+              out.c_str(), written, written - sharp, exposure_ms, sharp);
+  return true;
+}
+
+bool pan_sequence(const std::string& out, double peak_deg_s, int frames, double fps) {
+  if (!(peak_deg_s > 0.0) || frames < 2 || !(fps > 0.0)) {
+    return fail("pan: the rate, the frame count and the frame rate must be positive");
+  }
+  SyntheticScene scene;
+  scene.pan_peak_deg_s = peak_deg_s;
+  scene.max_depth_m = 4.0;  // a structured-light sensor's range; the back wall stays in it
+  if (!create_folder(out) || !write_synthetic_sequence(out, scene, frames, fps) ||
+      !write_text(out + "/camera.conf", synthetic_config(scene))) {
+    return fail("cannot write the synthetic sequence into " + out);
+  }
+  std::printf("%s: %d frames at %.0f Hz, pan peaking at %.0f deg/s (config: camera.conf)\n",
+              out.c_str(), frames, fps, peak_deg_s);
+  return true;
+}
+
+}  // namespace rgbdtam::testing

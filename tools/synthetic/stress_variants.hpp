@@ -1,0 +1,29 @@
+#pragma once
+// Stress variants of TUM RGB-D sequences, each written as a new TUM folder that keeps the
+// original's ground truth (tools/robustness.sh, the robustness tests). Host side: allocates.
+
+#include <string>
+
+namespace rgbdtam::testing {
+
+// Every n-th colour frame (the same motion, n times faster); images are linked, not copied.
+bool decimate_sequence(const std::string& in, const std::string& out, int n);
+// A sensor outage: `count` colour frames from the `first` cut out.
+bool cut_frames(const std::string& in, const std::string& out, int first, int count);
+// A kidnapped frame: colour frame `frame` (and the depth paired with it) shows what frame
+// `from` showed, under its own timestamps, as if the sensor had jumped there for one frame.
+bool kidnap_frame(const std::string& in, const std::string& out, int frame, int from);
+// Depth frames removed: every n-th (every > 1), or `burst` of every `period`.
+bool drop_depth_frames(const std::string& in, const std::string& out, int every, int burst,
+                       int period);
+// Motion blur along the ground-truth motion: each pixel is averaged over the exposure, sampling
+// the frame where the camera at each instant would have seen it (the pixel's own depth, or
+// the frame's median where there is none; lens distortion is ignored by the warp). Frames the
+// ground truth does not cover stay sharp. config gives the camera and the depth pairing.
+bool blur_sequence(const std::string& in, const std::string& out, const std::string& config,
+                   double exposure_ms);
+// A synthetic room seen by a camera panning at up to peak_deg_s, with exact ground truth and
+// its config as out/camera.conf.
+bool pan_sequence(const std::string& out, double peak_deg_s, int frames, double fps);
+
+}  // namespace rgbdtam::testing
