@@ -90,8 +90,10 @@ void ReplayJob::print_summary() const {
               rc.delivered, rc.skipped, rc.without_depth, c.tracked, c.lost, c.resets);
   std::printf(
       "health: %u frames failed a first check; %u recovered from other initial guesses, %u "
-      "against the last valid frame; %u tracked on one term (the other did not fit)\n",
-      c.retried, c.recovered_by_guesses, c.recovered_by_last_frame, c.single_term);
+      "against the last valid frame; %u tracked on one term (the other did not fit); %u depth "
+      "frames set aside (not a surface)\n",
+      c.retried, c.recovered_by_guesses, c.recovered_by_last_frame, c.single_term,
+      c.depth_not_surface);
   std::printf("keyframes: %u created, %u reused, pool %d of %d, %d recycled\n", c.keyframes,
               c.reused, system_.tracking().keyframes().size(),
               system_.tracking().keyframes().capacity(), system_.tracking().keyframes().recycled());
@@ -134,13 +136,13 @@ void ReplayJob::print_json(const EvaluationReport& r) const {
       "\"rpe_rot_deg_s\": %.4f, \"coverage\": %.4f, \"false_valid\": %d, "
       "\"false_valid_checked\": %d, \"resets\": %u, \"track_max_ms\": %.3f, "
       "\"retried\": %u, \"recovered_by_guesses\": %u, \"recovered_by_last_frame\": %u, "
-      "\"single_term\": %u}\n",
+      "\"single_term\": %u, \"depth_not_surface\": %u}\n",
       options_.sequence, residuals, c.frames, c.tracked, c.lost, c.keyframes, c.reused,
       tracking_ms_.percentile_ms(0.5), tracking_ms_.percentile_ms(0.95),
       frame_ms_.percentile_ms(0.5), r.ate_ok ? "true" : "false", r.ate.rmse_m * 100, r.ate.compared,
       r.rpe.trans_rmse_m * 100, r.rpe.rot_rmse_deg, r.has_coverage ? r.coverage.fraction() : 0.0,
       r.false_valid.count, r.false_valid.checked, c.resets, tracking_ms_.max_ms(), c.retried,
-      c.recovered_by_guesses, c.recovered_by_last_frame, c.single_term);
+      c.recovered_by_guesses, c.recovered_by_last_frame, c.single_term, c.depth_not_surface);
 }
 
 }  // namespace rgbdtam

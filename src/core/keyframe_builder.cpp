@@ -11,8 +11,6 @@ namespace {
 // Paper: the geometric error uses every pixel at 80x60 and one in 2, 3, 4 at the finer levels.
 constexpr int kGeometricStep[kPyramidLevels] = {4, 3, 2, 1};  // finest first
 constexpr int kBorderPx = 2;
-// Geometric points on a depth discontinuity have no meaningful gradient.
-constexpr float kMaxRelativeDepthSlope = 0.1f;
 constexpr int kHistogramBins = 1024;
 
 int photometric_cap(const TrackerOptions& opt, int level) {

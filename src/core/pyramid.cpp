@@ -1,6 +1,7 @@
 #include "rgbdtam/core/pyramid.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 namespace rgbdtam {
 namespace {
@@ -113,6 +114,25 @@ void compute_gradients(const ImageF& img, ImageF* gx, ImageF* gy) {
 
 void compute_depth_gradients(const ImageF& inv_depth, ImageF* gx, ImageF* gy) {
   central_differences(inv_depth, gx, gy, [](float a, float b) { return a > 0.f && b > 0.f; });
+}
+
+SurfaceCount count_surface_pixels(const ImageF& inv_depth, int stride) {
+  SurfaceCount c;
+  for (int y = 1; y < inv_depth.height() - 1; y += stride) {
+    const float* r = inv_depth.row(y);
+    const float* up = inv_depth.row(y - 1);
+    const float* down = inv_depth.row(y + 1);
+    for (int x = 1; x < inv_depth.width() - 1; x += stride) {
+      const float rho = r[x];
+      if (rho <= 0.f) continue;
+      ++c.valid;
+      if (r[x - 1] <= 0.f || r[x + 1] <= 0.f || up[x] <= 0.f || down[x] <= 0.f) continue;
+      const float limit = 2.f * kMaxRelativeDepthSlope * rho;  // central differences span 2 px
+      c.on_surface +=
+          std::fabs(r[x + 1] - r[x - 1]) <= limit && std::fabs(down[x] - up[x]) <= limit;
+    }
+  }
+  return c;
 }
 
 }  // namespace rgbdtam

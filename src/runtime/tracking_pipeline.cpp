@@ -266,10 +266,20 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
   FramePyramid& pyramid = this->frame();
   undistorter_.undistort_gray(frame.gray, &pyramid.gray(0));
   pyramid.build_gray();
+  // A structured-light sensor measures surfaces: real frames have 95-98 % of their valid
+  // depth on one (fr1_xyz, fr3_teddy), uniform noise 10 %. Depth that is mostly not a surface
+  // would warp the photometric term to anywhere, so the frame counts as without depth.
+  constexpr int kSurfaceStridePx = 4;
+  constexpr double kMinSurfaceFraction = 0.5;
+  bool depth_usable = false;
   if (frame.depth != nullptr) {
     undistorter_.undistort_depth(frame.depth, &depth_undistorted_);
     pyramid.build_inverse_depth(depth_undistorted_);
-  } else {
+    const SurfaceCount c = count_surface_pixels(pyramid.inverse_depth(0), kSurfaceStridePx);
+    depth_usable = c.on_surface >= kMinSurfaceFraction * c.valid;
+    if (!depth_usable) ++counters_.depth_not_surface;
+  }
+  if (!depth_usable) {
     pyramid.clear_depth();
     out.flags |= kNoDepth;
     ++counters_.without_depth;

@@ -119,5 +119,25 @@ TEST(RobustTracking, TheRealClipWithAKidnappedFrameIsNeverFalseValid) {
   testing::expect_tracked_or_lost(out, "clip with a kidnapped frame", 0.9);
 }
 
+TEST(RobustTracking, NoiseInGivesNoPoseOut) {
+  // Pure noise from the sensor once used to give confident poses metres apart. Noise depth is
+  // not a surface, so no frame has depth and none can be tracked; noise colour over real depth
+  // leaves the geometric term, which may track, but never wrongly.
+  const std::string dir = testing::make_temp_dir("clip_noise");
+  const std::string clip = testing::source_path("data/tum_fr1_xyz_clip");
+  const std::string config = testing::source_path("config/tum_fr1.conf");
+  for (const char* kind : {"depth", "both"}) {
+    ASSERT_TRUE(testing::noise_sequence(clip, dir + "/" + kind, config, kind, 3));
+    const auto out = testing::replay_and_evaluate(dir + "/" + kind, config);
+    EXPECT_EQ(out.counters.frames, 50u) << kind;
+    EXPECT_EQ(out.counters.tracked, 0u) << kind << " noise: no pose";
+    EXPECT_EQ(out.counters.depth_not_surface, 50u) << kind;
+  }
+  ASSERT_TRUE(testing::noise_sequence(clip, dir + "/colour", config, "colour", 3));
+  const auto colour = testing::replay_and_evaluate(dir + "/colour", config);
+  EXPECT_EQ(colour.counters.depth_not_surface, 0u);
+  testing::expect_tracked_or_lost(colour, "clip with noise for colour", 0.9);
+}
+
 }  // namespace
 }  // namespace rgbdtam

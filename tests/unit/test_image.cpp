@@ -75,6 +75,30 @@ TEST(Gradients, CentralDifferencesOfARamp) {
   EXPECT_EQ(gx.at(0, 20), 0.f);  // borders are zero
 }
 
+TEST(SurfacePixels, ATiltedPlaneIsASurfaceNoiseAndNoDepthAreNot) {
+  ImageF rho;
+  rho.allocate(64, 48);
+  // A plane tilted 45 degrees about the vertical, 1-2 m away: inverse depth linear in x.
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 64; ++x) rho.at(x, y) = 1.0f - 0.5f * x / 63.f;
+  const SurfaceCount plane = count_surface_pixels(rho, 2);
+  EXPECT_EQ(plane.valid, 23 * 31);  // rows 1, 3 .. 45 and columns 1, 3 .. 61
+  EXPECT_EQ(plane.on_surface, plane.valid);
+  uint32_t state = 12345;
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 64; ++x) {
+      state = state * 1664525u + 1013904223u;
+      rho.at(x, y) = 0.25f + 2.0f * static_cast<float>(state >> 8) / (1u << 24);  // 0.4-4 m
+    }
+  const SurfaceCount noise = count_surface_pixels(rho, 2);
+  EXPECT_EQ(noise.valid, plane.valid);
+  EXPECT_LT(noise.on_surface * 4, noise.valid) << "uniform noise is mostly not a surface";
+  rho.fill(0.f);
+  const SurfaceCount none = count_surface_pixels(rho, 2);
+  EXPECT_EQ(none.valid, 0);
+  EXPECT_EQ(none.on_surface, 0);
+}
+
 TEST(Canny, FindsTheOutlineOfASquareAsThinEdges) {
   ImageF img;
   ImageU8 edges;

@@ -16,6 +16,8 @@ int usage() {
                "  rgbdtam-stress kidnap <in> <out> <frame> <from-frame>\n"
                "  rgbdtam-stress blur <in> <out> --config <file> --exposure-ms <ms>\n"
                "  rgbdtam-stress drop-depth <in> <out> (--every <n> | --burst <length>/<period>)\n"
+               "  rgbdtam-stress noise <in> <out> --config <file> --kind depth|colour|both\n"
+               "                [--seed <n>]\n"
                "  rgbdtam-stress pan <out> --peak-deg-s <deg/s> [--frames <n>] [--fps <hz>]\n");
   return 2;
 }
@@ -26,6 +28,8 @@ int main(int argc, char** argv) {
   if (argc < 3) return usage();
   const std::string verb = argv[1];
   const char* config = nullptr;
+  std::string kind;
+  unsigned seed = 1;
   double exposure_ms = 0, peak = 0, fps = 30;
   int every = 0, burst = 0, period = 0, frames = 150;
   std::vector<std::string> positional;
@@ -36,6 +40,10 @@ int main(int argc, char** argv) {
       config = argv[++i];
     } else if (a == "--exposure-ms" && has) {
       exposure_ms = std::atof(argv[++i]);
+    } else if (a == "--kind" && has) {
+      kind = argv[++i];
+    } else if (a == "--seed" && has) {
+      seed = static_cast<unsigned>(std::strtoul(argv[++i], nullptr, 10));
     } else if (a == "--every" && has) {
       every = std::atoi(argv[++i]);
     } else if (a == "--burst" && has) {
@@ -65,6 +73,8 @@ int main(int argc, char** argv) {
     ok = blur_sequence(positional[0], positional[1], config, exposure_ms);
   } else if (verb == "drop-depth" && positional.size() == 2) {
     ok = drop_depth_frames(positional[0], positional[1], every, burst, period);
+  } else if (verb == "noise" && positional.size() == 2 && config != nullptr) {
+    ok = noise_sequence(positional[0], positional[1], config, kind, seed);
   } else if (verb == "pan" && positional.size() == 1) {
     ok = pan_sequence(positional[0], peak, frames, fps);
   } else {

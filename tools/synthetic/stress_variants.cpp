@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -137,6 +138,14 @@ int nearest_line(const std::vector<std::string>& lines, double t) {
     }
   }
   return best;
+}
+
+bool load_params(const std::string& config, Params* p) {
+  char* text = nullptr;
+  Status s = read_text_file(config.c_str(), 1 << 20, &text);
+  if (s.is_ok()) s = parse_params(text, config.c_str(), p);
+  delete[] text;
+  return s.is_ok() ? true : fail(s.message());
 }
 
 // The file name of a `stamp file` list line.
@@ -295,15 +304,11 @@ bool blur_frame(const ImageU8& gray, const ImageU16* depth, const Params& p,
 bool blur_sequence(const std::string& in, const std::string& out, const std::string& config,
                    double exposure_ms) {
   if (!(exposure_ms > 0.0)) return fail("blur: the exposure must be positive");
-  char* text = nullptr;
   Params p;
-  Status s = read_text_file(config.c_str(), 1 << 20, &text);
-  if (s.is_ok()) s = parse_params(text, config.c_str(), &p);
-  delete[] text;
-  if (!s.is_ok()) return fail(s.message());
+  if (!load_params(config, &p)) return false;
   std::vector<StampedPose> gt;
   int bad = 0;
-  s = read_tum_trajectory((in + "/groundtruth.txt").c_str(), &gt, &bad);
+  Status s = read_tum_trajectory((in + "/groundtruth.txt").c_str(), &gt, &bad);
   if (!s.is_ok()) return fail(s.message());
   const Trajectory truth(gt);
   TumReplaySource source;
@@ -348,6 +353,68 @@ bool blur_sequence(const std::string& in, const std::string& out, const std::str
   std::printf("%s: %d frames, %d blurred over %.1f ms, %d without ground truth kept sharp\n",
               out.c_str(), written, written - sharp, exposure_ms, sharp);
   return true;
+}
+
+namespace {
+bool write_png(const std::string& path, int w, int h, const uint8_t* px) {
+  return write_png_gray8(path, w, h, px);
+}
+bool write_png(const std::string& path, int w, int h, const uint16_t* px) {
+  return write_png_gray16(path, w, h, px);
+}
+
+// Replaces every image of one list (rgb.txt or depth.txt) with what draw(pixels) writes.
+template <typename Pixel, typename Draw>
+bool noise_list(const std::string& in, const std::string& out, const char* list, const char* folder,
+                int w, int h, Draw draw) {
+  std::vector<std::string> lines, written = {"# pure noise in place of the images of " + in};
+  if (!read_lines(in + "/" + list, &lines) || ::mkdir((out + "/" + folder).c_str(), 0755) != 0) {
+    return fail("cannot make the noise images of " + out + "/" + list);
+  }
+  std::vector<Pixel> pixels(static_cast<size_t>(w) * h);
+  for (const std::string& l : lines) {
+    if (!is_data_line(l)) continue;
+    draw(&pixels);
+    const std::string name = folder + ("/" + std::to_string(written.size() - 1) + ".png");
+    if (!write_png(out + "/" + name, w, h, pixels.data()))
+      return fail("cannot write " + out + "/" + name);
+    written.push_back(stamp_of(l) + " " + name);
+  }
+  return write_lines(out + "/" + list, written);
+}
+}  // namespace
+
+bool noise_sequence(const std::string& in, const std::string& out, const std::string& config,
+                    const std::string& kind, unsigned seed) {
+  const bool depth = kind == "depth" || kind == "both";
+  const bool colour = kind == "colour" || kind == "both";
+  if (!depth && !colour) return fail("noise: the kind is depth, colour or both");
+  Params p;
+  if (!load_params(config, &p) || !make_output(in, out) ||
+      !copy_file(in, out, "groundtruth.txt", true) || !copy_file(in, out, "calib.txt", false)) {
+    return false;
+  }
+  const int w = p.camera.width_px, h = p.camera.height_px;
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> intensity(0, 255);
+  std::uniform_real_distribution<double> depth_m(p.sensor.depth_range.min_m,
+                                                 p.sensor.depth_range.max_m);
+  const bool colour_ok = colour ? noise_list<uint8_t>(in, out, "rgb.txt", "rgb", w, h,
+                                                      [&](std::vector<uint8_t>* px) {
+                                                        for (uint8_t& v : *px)
+                                                          v = static_cast<uint8_t>(intensity(rng));
+                                                      })
+                                : copy_file(in, out, "rgb.txt", true) && link_into(in, out, "rgb");
+  const bool depth_ok =
+      depth ? noise_list<uint16_t>(
+                  in, out, "depth.txt", "depth", w, h,
+                  [&](std::vector<uint16_t>* px) {
+                    for (uint16_t& v : *px) {
+                      v = static_cast<uint16_t>(std::lround(depth_m(rng) * p.sensor.depth_factor));
+                    }
+                  })
+            : copy_file(in, out, "depth.txt", true) && link_into(in, out, "depth");
+  return colour_ok && depth_ok;
 }
 
 bool pan_sequence(const std::string& out, double peak_deg_s, int frames, double fps) {

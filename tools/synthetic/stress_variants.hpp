@@ -22,6 +22,11 @@ bool drop_depth_frames(const std::string& in, const std::string& out, int every,
 // ground truth does not cover stay sharp. config gives the camera and the depth pairing.
 bool blur_sequence(const std::string& in, const std::string& out, const std::string& config,
                    double exposure_ms);
+// Pure noise in place of the depth images, the colour images or both (kind: depth, colour,
+// both), from a fixed seed; stamps and ground truth as recorded. Depth is uniform over the
+// sensor's range. config gives the image size, the depth scale and the range.
+bool noise_sequence(const std::string& in, const std::string& out, const std::string& config,
+                    const std::string& kind, unsigned seed);
 // A synthetic room seen by a camera panning at up to peak_deg_s, with exact ground truth and
 // its config as out/camera.conf.
 bool pan_sequence(const std::string& out, double peak_deg_s, int frames, double fps);

@@ -42,6 +42,17 @@ class FramePyramid {
   bool has_depth_ = false;
 };
 
+// Inverse depth changing by more than this fraction of itself per pixel is an occluding edge
+// (or noise), not a surface seen by the sensor.
+constexpr float kMaxRelativeDepthSlope = 0.1f;
+
+// Valid inverse-depth pixels on a grid of `stride` px, and those of them on a surface: their
+// four neighbours valid and both central differences within kMaxRelativeDepthSlope.
+struct SurfaceCount {
+  int valid = 0, on_surface = 0;
+};
+SurfaceCount count_surface_pixels(const ImageF& inv_depth, int stride);
+
 // Central-difference gradients in intensity (or inverse-depth) units per pixel. Border
 // pixels, and inverse-depth pixels next to an invalid one, get 0.
 void compute_gradients(const ImageF& img, ImageF* gx, ImageF* gy);

@@ -16,6 +16,7 @@ struct TrackingCounters {
   uint32_t tracked = 0;
   uint32_t lost = 0;
   uint32_t without_depth = 0;
+  uint32_t depth_not_surface = 0;  // ... of which the sensor's depth was set aside as noise
   uint32_t keyframes = 0;
   uint32_t resets = 0;
   uint32_t reused = 0;                    // keyframe switches that reused an earlier keyframe
