@@ -39,11 +39,17 @@ Status parse_tum_list(const char* text, const char* source, TumList* out) {
         ++name_end;
       }
       const size_t len = name != nullptr ? static_cast<size_t>(name_end - name) : 0;
+      const bool in_range =
+          after == nullptr || (e.timestamp_ns >= 0 && e.timestamp_ns < kMaxStampNs);
       if (after == nullptr || (*after != ' ' && *after != '\t' && *after != ',') || len == 0 ||
-          len >= sizeof(e.path)) {
+          len >= sizeof(e.path) || !in_range) {
         if (out->bad_lines++ == 0) {
-          out->first_problem = Status::error(
-              StatusCode::kCorrupt, "%s:%d: expected 'timestamp filename'", source, line_no);
+          out->first_problem =
+              in_range ? Status::error(StatusCode::kCorrupt, "%s:%d: expected 'timestamp filename'",
+                                       source, line_no)
+                       : Status::error(StatusCode::kCorrupt,
+                                       "%s:%d: timestamp out of range (0 to 4e9 s, 1970-2096)",
+                                       source, line_no);
         }
       } else {
         std::memcpy(e.path, name, len);

@@ -1,5 +1,6 @@
 #include "rgbdtam/hal/tum_timestamp.hpp"
 
+#include <cstdint>
 #include <cstdio>
 
 namespace rgbdtam {
@@ -13,9 +14,12 @@ const char* parse_seconds_ns(const char* s, int64_t* ns) {
   }
   int64_t sec = 0;
   int digits = 0;
+  constexpr int64_t kMaxSeconds = INT64_MAX / 1'000'000'000LL - 1;  // room for the fraction
+  bool saturated = false;
   while (*s >= '0' && *s <= '9') {
-    if (sec > 9'000'000'000LL) return nullptr;  // beyond int64 nanoseconds
-    sec = sec * 10 + (*s++ - '0');
+    if (!saturated) sec = sec * 10 + (*s - '0');
+    saturated = saturated || sec > kMaxSeconds;
+    ++s;
     ++digits;
   }
   int64_t frac = 0;
@@ -33,7 +37,8 @@ const char* parse_seconds_ns(const char* s, int64_t* ns) {
   }
   if (digits == 0) return nullptr;
   for (int i = frac_digits; i < 9; ++i) frac *= 10;
-  *ns = (sec * 1'000'000'000LL + frac) * (negative ? -1 : 1);
+  const int64_t magnitude = saturated ? INT64_MAX : sec * 1'000'000'000LL + frac;
+  *ns = negative ? -magnitude : magnitude;
   return s;
 }
 

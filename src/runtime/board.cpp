@@ -1,5 +1,6 @@
 #include "rgbdtam/runtime/board.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -14,6 +15,9 @@ bool parse_pose(const char* value, void* field) {
                   &v[6], &used) != 7 ||
       value[used] != '\0') {
     return false;
+  }
+  for (const double x : v) {
+    if (!std::isfinite(x)) return false;  // NaN passes every comparison below unnoticed
   }
   const Eigen::Quaterniond q(v[0], v[1], v[2], v[3]);
   if (std::abs(q.norm() - 1.0) > 1e-3) return false;  // a typo, not a rotation

@@ -25,7 +25,11 @@ mavlink::Odometry PoseLink::odometry_of(const PoseEstimate& pose) {
   o.reset_counter = static_cast<uint8_t>(pose.reset_counter);
   o.estimator_type = mavlink::kMavEstimatorTypeVision;
   o.velocity_covariance[0] = NAN;  // unknown
-  if ((pose.flags & kPoseValid) == 0) {
+  // The local frame is the body at the first frame: T_l_b = T_b_c T_w_c T_c_b.
+  const SE3 T_l_b = config_.T_b_c * pose.T_w_c * config_.T_b_c.inverse();
+  // A pose that is not finite never goes out as valid, whatever flagged it.
+  const bool finite = T_l_b.translation().allFinite() && T_l_b.quaternion().coeffs().allFinite();
+  if ((pose.flags & kPoseValid) == 0 || !finite) {
     o.x = o.y = o.z = NAN;
     for (float& q : o.q) q = NAN;
     o.vx = o.vy = o.vz = o.rollspeed = o.pitchspeed = o.yawspeed = NAN;
@@ -34,8 +38,6 @@ mavlink::Odometry PoseLink::odometry_of(const PoseEstimate& pose) {
     have_previous_ = false;
     return o;
   }
-  // The local frame is the body at the first frame: T_l_b = T_b_c T_w_c T_c_b.
-  const SE3 T_l_b = config_.T_b_c * pose.T_w_c * config_.T_b_c.inverse();
   o.x = static_cast<float>(T_l_b.translation().x());
   o.y = static_cast<float>(T_l_b.translation().y());
   o.z = static_cast<float>(T_l_b.translation().z());

@@ -79,6 +79,8 @@ TEST(Board, BadBoardsAreClearErrors) {
   expect_error(std::string(kMinimal) + "gpio.led_line = 3\n", "gpio.chip is empty");
   expect_error(std::string(kMinimal) + "link.T_b_c = 1 0 0\n", "link.T_b_c");
   expect_error(std::string(kMinimal) + "link.T_b_c = 2 0 0 0 0 0 0\n", "link.T_b_c");
+  expect_error(std::string(kMinimal) + "link.T_b_c = nan 0 0 0 0 0 0\n", "link.T_b_c");
+  expect_error(std::string(kMinimal) + "link.T_b_c = 1 0 0 0 0 inf 0\n", "link.T_b_c");
   expect_error(std::string(kMinimal) + "threads.link_priority = 120\n", "out of range");
   expect_error(std::string(kMinimal) + "gpio.led_pin = 3\n", "unknown key 'gpio.led_pin'");
   expect_error(std::string(kMinimal) + "sensor.usb_id = kinect\n", "sensor.usb_id 'kinect'");

@@ -72,6 +72,13 @@ TEST(PoseLink, OdometryIsInTheBodyFrameWithVelocitiesCovarianceAndHealth) {
   EXPECT_EQ(a.reset_counter, 1);
   EXPECT_TRUE(std::isnan(a.vx));
   EXPECT_NEAR(a.x, 0.06, 1e-6);
+
+  // A pose flagged valid that is not finite goes out as lost, never with a quality.
+  PoseEstimate broken = pose_at(4, forward_in_camera);
+  broken.T_w_c = SE3(Eigen::Quaterniond::Identity(), Vector3d(NAN, 0, 0));
+  const mavlink::Odometry b = link.odometry_of(broken);
+  EXPECT_EQ(b.quality, -1);
+  EXPECT_TRUE(std::isnan(b.x) && std::isnan(b.q[0]));
 }
 
 // Collects every frame a decoder finds in a byte source.

@@ -33,6 +33,10 @@ TEST(Timestamps, ExactNanosecondsBothWays) {
   EXPECT_STREQ(buf, "12.000000001");
   EXPECT_EQ(parse_seconds_ns("rgb/x.png", &ns), nullptr);
   EXPECT_EQ(parse_seconds_ns("", &ns), nullptr);
+  ASSERT_NE(parse_seconds_ns("9999999999.5", &ns), nullptr);
+  EXPECT_EQ(ns, INT64_MAX) << "beyond int64 nanoseconds: saturated, never wrapped";
+  ASSERT_NE(parse_seconds_ns("-99999999999999999999999", &ns), nullptr);
+  EXPECT_EQ(ns, -INT64_MAX);
 }
 
 TEST(TumList, SkipsCommentsAndCountsBadLines) {
@@ -47,6 +51,15 @@ TEST(TumList, SkipsCommentsAndCountsBadLines) {
   EXPECT_NE(std::string(list.first_problem.message()).find("rgb.txt:5"), std::string::npos)
       << list.first_problem.message();
   EXPECT_FALSE(parse_tum_list("# only comments\n", "empty.txt", &list).is_ok());
+  // Stamps out of any recording's range are errors for their line, not overflows for others.
+  ASSERT_TRUE(parse_tum_list("1.0 a.png\n9999999999.5 b.png\n-3.0 c.png\n4100000000 d.png\n",
+                             "rgb.txt", &list)
+                  .is_ok());
+  EXPECT_EQ(list.size, 1);
+  EXPECT_EQ(list.bad_lines, 3);
+  EXPECT_NE(std::string(list.first_problem.message()).find("rgb.txt:2: timestamp out of range"),
+            std::string::npos)
+      << list.first_problem.message();
 }
 
 TEST(PngDecoder, ColourBecomesBt601GreyAndBadFilesAreErrors) {
