@@ -4,6 +4,7 @@
 #include <cstring>
 #include <string>
 
+#include "json_line.hpp"
 #include "rgbdtam/hal/tum_trajectory.hpp"
 
 namespace rgbdtam {
@@ -24,23 +25,27 @@ EvaluationReport evaluate_all(const std::vector<StampedPose>& gt,
 
 void print_report(const EvaluationReport& r, bool json, const char* label) {
   if (json) {
-    std::printf(
-        "{\"poses_compared\": %d, \"ate_rmse_cm\": %.4f, \"ate_mean_cm\": %.4f, "
-        "\"ate_median_cm\": %.4f, \"ate_max_cm\": %.4f, \"rpe_pairs\": %d, "
-        "\"rpe_trans_rmse_cm_per_s\": %.4f, \"rpe_rot_rmse_deg_per_s\": %.4f",
-        r.ate.compared, r.ate.rmse_m * 100, r.ate.mean_m * 100, r.ate.median_m * 100,
-        r.ate.max_m * 100, r.rpe.compared, r.rpe.trans_rmse_m * 100, r.rpe.rot_rmse_deg);
+    JsonLine j;
+    j.integer("poses_compared", r.ate.compared)
+        .number("ate_rmse_cm", r.ate.rmse_m * 100)
+        .number("ate_mean_cm", r.ate.mean_m * 100)
+        .number("ate_median_cm", r.ate.median_m * 100)
+        .number("ate_max_cm", r.ate.max_m * 100)
+        .integer("rpe_pairs", r.rpe.compared)
+        .number("rpe_trans_rmse_cm_per_s", r.rpe.trans_rmse_m * 100)
+        .number("rpe_rot_rmse_deg_per_s", r.rpe.rot_rmse_deg);
     if (r.has_coverage) {
-      std::printf(", \"coverage\": %.4f, \"frames_with_gt\": %d, \"frames_estimated\": %d",
-                  r.coverage.fraction(), r.coverage.frames, r.coverage.estimated);
+      j.number("coverage", r.coverage.fraction())
+          .integer("frames_with_gt", r.coverage.frames)
+          .integer("frames_estimated", r.coverage.estimated);
     }
     const FalseValidResult& f = r.false_valid;
-    std::printf(
-        ", \"false_valid\": %d, \"false_valid_checked\": %d, "
-        "\"false_valid_worst_trans_cm\": %.4f, \"false_valid_worst_rot_deg\": %.4f",
-        f.count, f.checked, f.worst_translation_m * 100, f.worst_rotation_deg);
-    if (f.count > 0) std::printf(", \"false_valid_first_stamp_s\": %.6f", f.first_stamp_s);
-    std::printf("}\n");
+    j.integer("false_valid", f.count)
+        .integer("false_valid_checked", f.checked)
+        .number("false_valid_worst_trans_cm", f.worst_translation_m * 100)
+        .number("false_valid_worst_rot_deg", f.worst_rotation_deg);
+    if (f.count > 0) j.number("false_valid_first_stamp_s", f.first_stamp_s, 6);
+    j.end();
     return;
   }
   if (!r.ate_ok) {
@@ -69,6 +74,12 @@ void print_report(const EvaluationReport& r, bool json, const char* label) {
       f.worst_translation_m * 100, f.worst_rotation_deg);
   if (f.count > 0) std::printf("; first at %.6f s", f.first_stamp_s);
   std::printf("\n");
+  if (r.nees.pairs > 0) {
+    std::printf(
+        "covariance (frame-to-frame NEES, consistent at 6): mean %.2f, median %.2f over %d pairs; "
+        "translation %.2f, rotation %.2f (each consistent at 3)\n",
+        r.nees.mean, r.nees.median, r.nees.pairs, r.nees.mean_translation, r.nees.mean_rotation);
+  }
 }
 
 int evaluate_command(int argc, char** argv) {
@@ -109,8 +120,10 @@ int evaluate_command(int argc, char** argv) {
       return 1;
     }
   }
-  if (bad_est > 0)
-    std::fprintf(stderr, "rgbdtam eval: skipped %d unreadable lines in %s\n", bad_est, est_path);
+  for (auto [path, bad] : {std::make_pair(gt_path, bad_gt), std::make_pair(est_path, bad_est)}) {
+    if (bad > 0)
+      std::fprintf(stderr, "rgbdtam eval: skipped %d unreadable lines in %s\n", bad, path);
+  }
   // Coverage counts against the sequence's frame list: rgb.txt beside the ground truth.
   std::string frames = frames_path != nullptr ? frames_path : "";
   if (frames.empty()) {
@@ -119,7 +132,18 @@ int evaluate_command(int argc, char** argv) {
     frames = (slash == std::string::npos ? std::string(".") : gt_str.substr(0, slash)) + "/rgb.txt";
   }
   std::vector<double> stamps;
-  const bool have_frames = read_tum_stamps(frames.c_str(), &stamps).is_ok();
+  const Status frames_read = read_tum_stamps(frames.c_str(), &stamps);
+  const bool have_frames = frames_read.is_ok();
+  if (!have_frames && frames_path != nullptr) {
+    std::fprintf(stderr, "rgbdtam eval: --frames: %s\n", frames_read.message());
+    return 1;
+  }
+  if (!have_frames) {
+    std::fprintf(stderr,
+                 "rgbdtam eval: no coverage: no frame list beside the ground truth (%s); give "
+                 "--frames rgb.txt\n",
+                 frames.c_str());
+  }
   const EvaluationReport r = evaluate_all(gt, est, have_frames ? &stamps : nullptr);
   print_report(r, json, "all poses in the file");
   return r.ate_ok ? 0 : 1;

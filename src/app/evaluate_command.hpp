@@ -12,6 +12,7 @@ struct EvaluationReport {
   Coverage coverage;
   bool has_coverage = false;
   FalseValidResult false_valid;
+  NeesResult nees;  // only where the estimates come with covariances (replay)
 };
 
 EvaluationReport evaluate_all(const std::vector<StampedPose>& gt,

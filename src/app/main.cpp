@@ -1,5 +1,10 @@
 // rgbdtam command line: replay a recorded sequence, evaluate a trajectory, show parameters.
 
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <climits>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -32,6 +37,20 @@ void usage() {
                "  rgbdtam record --board <board-folder> <out-dir> [--board-set key=value]...\n"
                "                 [--max-frames N]\n"
                "sensor backends in this build: " RGBDTAM_HAL_BACKENDS "\n");
+}
+
+// --max-frames: a whole number of frames, 0 for all. False (with the message) for anything else.
+bool parse_max_frames(const char* text, const char* verb, int* out) {
+  errno = 0;
+  char* end = nullptr;
+  const long v = std::strtol(text, &end, 10);
+  if (end == text || *end != '\0' || errno != 0 || v < 0 || v > INT_MAX) {
+    std::fprintf(stderr, "rgbdtam %s: --max-frames needs a whole number of frames, got '%s'\n",
+                 verb, text);
+    return false;
+  }
+  *out = static_cast<int>(v);
+  return true;
 }
 
 // Shared by replay and params: --config and --set build the parameters.
@@ -88,6 +107,47 @@ int params_command(int argc, char** argv) {
   return 0;
 }
 
+// True (after saying so) when writing `output` would replace one of the run's inputs: its
+// config, the sequence's lists, or an existing file in its image folders.
+bool replaces_an_input(const char* option, const char* output, const char* config,
+                       const std::string& sequence) {
+  struct stat out;
+  if (output == nullptr || ::stat(output, &out) != 0) return false;  // a new file replaces nothing
+  auto same = [&](const std::string& path) {
+    struct stat st;
+    return ::stat(path.c_str(), &st) == 0 && st.st_dev == out.st_dev && st.st_ino == out.st_ino;
+  };
+  const std::string inputs[] = {config != nullptr ? config : "", sequence + "/rgb.txt",
+                                sequence + "/depth.txt", sequence + "/groundtruth.txt"};
+  for (const std::string& input : inputs) {
+    if (!input.empty() && same(input)) {
+      std::fprintf(stderr, "rgbdtam replay: %s %s is an input of this run (%s)\n", option, output,
+                   input.c_str());
+      return true;
+    }
+  }
+  const std::string path = output;
+  const size_t slash = path.find_last_of('/');
+  const std::string parent =
+      slash == std::string::npos ? "." : path.substr(0, std::max<size_t>(slash, 1));
+  struct stat dir;
+  for (const char* images : {"/rgb", "/depth"}) {
+    struct stat st;
+    if (::stat((sequence + images).c_str(), &st) == 0 && ::stat(parent.c_str(), &dir) == 0 &&
+        st.st_dev == dir.st_dev && st.st_ino == dir.st_ino) {
+      std::fprintf(stderr, "rgbdtam replay: %s %s would replace one of the sequence's images\n",
+                   option, output);
+      return true;
+    }
+  }
+  return false;
+}
+
+ReplayJob* g_replaying = nullptr;
+void stop_replay(int) {
+  if (g_replaying != nullptr) g_replaying->request_stop();
+}
+
 int replay_command(int argc, char** argv) {
   ConfigArgs c;
   ReplayOptions options;
@@ -100,7 +160,7 @@ int replay_command(int argc, char** argv) {
     } else if (std::strcmp(argv[i], "--map") == 0 && i + 1 < argc) {
       map_path = argv[++i];
     } else if (std::strcmp(argv[i], "--max-frames") == 0 && i + 1 < argc) {
-      options.max_frames = std::atoi(argv[++i]);
+      if (!parse_max_frames(argv[++i], "replay", &options.max_frames)) return 2;
     } else if (std::strcmp(argv[i], "--quiet") == 0) {
       options.progress = false;
     } else if (std::strcmp(argv[i], "--json") == 0) {
@@ -116,6 +176,10 @@ int replay_command(int argc, char** argv) {
   }
   if (options.sequence == nullptr) {
     usage();
+    return 2;
+  }
+  if (replaces_an_input("--trajectory", options.trajectory_path, c.config, options.sequence) ||
+      replaces_an_input("--map", map_path, c.config, options.sequence)) {
     return 2;
   }
   Status s = load_params(c, &options.params);
@@ -142,10 +206,19 @@ int replay_command(int argc, char** argv) {
     std::fprintf(stderr, "rgbdtam replay: %s\n", s.message());
     return 1;
   }
-  while (job->step()) {
+  // Ctrl-C ends the replay after the current frame, with every output complete.
+  g_replaying = job.get();
+  std::signal(SIGINT, stop_replay);
+  std::signal(SIGTERM, stop_replay);
+  while (job->step() && ply->status().is_ok()) {
   }
   s = job->finish();
+  g_replaying = nullptr;
   if (!s.is_ok()) std::fprintf(stderr, "rgbdtam replay: %s\n", s.message());
+  if (job->stopped_early()) {
+    std::fprintf(stderr, "rgbdtam replay: interrupted after %d frames\n",
+                 static_cast<int>(job->counters().frames));
+  }
   if (map_path != nullptr) {
     const Status ps = ply->close();
     if (!ps.is_ok()) {
@@ -158,7 +231,7 @@ int replay_command(int argc, char** argv) {
   }
   if (!json) {
     job->print_summary();
-    if (options.trajectory_path != nullptr) {
+    if (options.trajectory_path != nullptr && s.is_ok()) {
       std::printf("trajectory: %s (%zu poses)\n", options.trajectory_path, job->estimates().size());
     }
   }
@@ -176,9 +249,15 @@ int replay_command(int argc, char** argv) {
       stamps.resize(static_cast<size_t>(options.max_frames));
     }
     report = evaluate_all(gt, job->estimates(), &stamps);
+    report.nees = evaluate_frame_to_frame_nees(gt, job->estimates(), job->covariances());
     if (!json) print_report(report, false, "all frames");
   }
   if (json) job->print_json(report);
+  if (s.is_ok() && job->estimates().empty()) {
+    std::fprintf(stderr, "rgbdtam replay: no frame was tracked, so there is no trajectory\n");
+    return 1;
+  }
+  if (job->stopped_early()) return 130;  // as a shell reports a job ended by SIGINT
   return s.is_ok() ? 0 : 1;
 }
 
@@ -205,7 +284,7 @@ bool parse_run_options(int argc, char** argv, RunOptions* options, const char** 
                options->param_override_count < RunOptions::kMaxOverrides) {
       options->param_overrides[options->param_override_count++] = argv[++i];
     } else if (std::strcmp(argv[i], "--max-frames") == 0 && has_value) {
-      options->max_frames = std::atoi(argv[++i]);
+      if (!parse_max_frames(argv[++i], verb, &options->max_frames)) return false;
     } else if (std::strcmp(argv[i], "--quiet") == 0) {
       options->progress = false;
     } else if (positional != nullptr && *positional == nullptr && argv[i][0] != '-') {
@@ -237,6 +316,10 @@ int run_command(int argc, char** argv) {
   job->finish();
   g_running = nullptr;
   job->print_summary();
+  if (job->runtime().counters().tracked == 0) {
+    std::fprintf(stderr, "rgbdtam run: no frame was tracked, so no pose was sent\n");
+    return 1;
+  }
   return 0;
 }
 

@@ -22,7 +22,7 @@ Status RecordJob::start() {
 }
 
 bool RecordJob::step() {
-  if (stop_requested_.load() ||
+  if (stop_requested_.load() || recorder_.failed() ||
       (options_.max_frames > 0 && frames_ >= static_cast<uint32_t>(options_.max_frames))) {
     return false;
   }

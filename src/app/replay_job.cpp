@@ -1,8 +1,11 @@
 #include "replay_job.hpp"
 
+#include <cmath>
 #include <cstdio>
 
+#include "json_line.hpp"
 #include "rgbdtam/hal/clock.hpp"
+#include "rgbdtam/runtime/pose_link.hpp"
 
 namespace rgbdtam {
 namespace {
@@ -31,12 +34,14 @@ Status ReplayJob::init(const ReplayOptions& options) {
     RGBDTAM_RETURN_IF_ERROR(writer_.open(options.trajectory_path));
   }
   estimates_.reserve(static_cast<size_t>(source_.frame_count()));
+  covariances_.reserve(static_cast<size_t>(source_.frame_count()));
   started_ns_ = monotonic_ns();
   return Status::ok();
 }
 
 bool ReplayJob::step() {
   if (options_.max_frames > 0 && processed_ >= options_.max_frames) return false;
+  if (stop_requested_.load() || !write_failure_.is_ok()) return false;
   const int64_t t0 = monotonic_ns();
   SensorFrame frame;
   Status warning;
@@ -54,12 +59,10 @@ bool ReplayJob::step() {
   last_pose_ = system_.track(frame);
   const int64_t t2 = monotonic_ns();
   system_.map_pending();
-  const Status w = writer_.write(last_pose_);
-  if (!w.is_ok() && reported_problems_++ < kMaxProblemsPrinted) {
-    std::fprintf(stderr, "error: %s\n", w.message());
-  }
+  write_failure_ = writer_.write(last_pose_);
   if ((last_pose_.flags & kPoseValid) != 0) {
     estimates_.push_back({static_cast<double>(last_pose_.timestamp_ns) * 1e-9, last_pose_.T_w_c});
+    covariances_.push_back(pose_covariance(last_pose_));
   }
   const int64_t t3 = monotonic_ns();
   tracking_ms_.add(t2 - t1);
@@ -75,7 +78,8 @@ bool ReplayJob::step() {
 Status ReplayJob::finish() {
   system_.finish();
   finished_ns_ = monotonic_ns();
-  return writer_.close();
+  const Status closed = writer_.close();
+  return write_failure_.is_ok() ? closed : write_failure_;
 }
 
 void ReplayJob::print_summary() const {
@@ -128,21 +132,36 @@ void ReplayJob::print_json(const EvaluationReport& r) const {
   const TrackingCounters& c = system_.tracking().counters();
   char residuals[16];
   options_.params.tracker.residuals.name(residuals, sizeof(residuals));
-  std::printf(
-      "{\"sequence\": \"%s\", \"residuals\": \"%s\", \"frames\": %u, \"tracked\": %u, "
-      "\"lost\": %u, \"keyframes\": %u, \"reused\": %u, \"track_median_ms\": %.3f, "
-      "\"track_p95_ms\": %.3f, \"frame_median_ms\": %.3f, \"ate_ok\": %s, "
-      "\"ate_rmse_cm\": %.4f, \"poses_compared\": %d, \"rpe_trans_cm_s\": %.4f, "
-      "\"rpe_rot_deg_s\": %.4f, \"coverage\": %.4f, \"false_valid\": %d, "
-      "\"false_valid_checked\": %d, \"resets\": %u, \"track_max_ms\": %.3f, "
-      "\"retried\": %u, \"recovered_by_guesses\": %u, \"recovered_by_last_frame\": %u, "
-      "\"single_term\": %u, \"depth_not_surface\": %u}\n",
-      options_.sequence, residuals, c.frames, c.tracked, c.lost, c.keyframes, c.reused,
-      tracking_ms_.percentile_ms(0.5), tracking_ms_.percentile_ms(0.95),
-      frame_ms_.percentile_ms(0.5), r.ate_ok ? "true" : "false", r.ate.rmse_m * 100, r.ate.compared,
-      r.rpe.trans_rmse_m * 100, r.rpe.rot_rmse_deg, r.has_coverage ? r.coverage.fraction() : 0.0,
-      r.false_valid.count, r.false_valid.checked, c.resets, tracking_ms_.max_ms(), c.retried,
-      c.recovered_by_guesses, c.recovered_by_last_frame, c.single_term, c.depth_not_surface);
+  JsonLine()
+      .text("sequence", options_.sequence)
+      .text("residuals", residuals)
+      .integer("frames", c.frames)
+      .integer("tracked", c.tracked)
+      .integer("lost", c.lost)
+      .integer("keyframes", c.keyframes)
+      .integer("reused", c.reused)
+      .number("track_median_ms", tracking_ms_.percentile_ms(0.5), 3)
+      .number("track_p95_ms", tracking_ms_.percentile_ms(0.95), 3)
+      .number("frame_median_ms", frame_ms_.percentile_ms(0.5), 3)
+      .boolean("ate_ok", r.ate_ok)
+      .number("ate_rmse_cm", r.ate.rmse_m * 100)
+      .integer("poses_compared", r.ate.compared)
+      .number("rpe_trans_cm_s", r.rpe.trans_rmse_m * 100)
+      .number("rpe_rot_deg_s", r.rpe.rot_rmse_deg)
+      .number("coverage", r.has_coverage ? r.coverage.fraction() : 0.0)
+      .integer("false_valid", r.false_valid.count)
+      .integer("false_valid_checked", r.false_valid.checked)
+      .integer("resets", c.resets)
+      .number("track_max_ms", tracking_ms_.max_ms(), 3)
+      .integer("retried", c.retried)
+      .integer("recovered_by_guesses", c.recovered_by_guesses)
+      .integer("recovered_by_last_frame", c.recovered_by_last_frame)
+      .integer("single_term", c.single_term)
+      .integer("depth_not_surface", c.depth_not_surface)
+      .number("nees_mean", r.nees.pairs > 0 ? r.nees.mean : NAN)
+      .number("nees_median", r.nees.pairs > 0 ? r.nees.median : NAN)
+      .integer("nees_pairs", r.nees.pairs)
+      .end();
 }
 
 }  // namespace rgbdtam

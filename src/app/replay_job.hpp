@@ -2,6 +2,7 @@
 // Replays a recorded sequence through the tracking pipeline: source -> pipeline -> writer.
 // init() allocates everything; step() processes one frame without allocating.
 
+#include <atomic>
 #include <vector>
 
 #include "evaluate_command.hpp"
@@ -25,14 +26,19 @@ struct ReplayOptions {
 class ReplayJob {
  public:
   Status init(const ReplayOptions& options);
-  // Processes the next frame; false when the sequence has ended.
+  // Processes the next frame; false when the sequence has ended, after request_stop(), or
+  // when the trajectory cannot be written (finish() says why).
   bool step();
-  Status finish();  // flushes the trajectory
+  void request_stop() { stop_requested_.store(true); }  // async-signal-safe
+  bool stopped_early() const { return stop_requested_.load(); }
+  Status finish();  // the trajectory complete and in place, or the first failure
   void print_summary() const;
   // The summary and the evaluation as one JSON object, for tools/bench.sh.
   void print_json(const EvaluationReport& report) const;
 
   const std::vector<StampedPose>& estimates() const { return estimates_; }
+  // Of each estimate: the reported pose covariance, (translation, rotation) in the camera.
+  const std::vector<Eigen::Matrix<double, 6, 6>>& covariances() const { return covariances_; }
   const TrackingCounters& counters() const { return system_.tracking().counters(); }
   const LatencyStats& tracking_time() const { return tracking_ms_; }
   const LatencyStats& frame_time() const { return frame_ms_; }
@@ -44,11 +50,14 @@ class ReplayJob {
   TumReplaySource source_;
   SlamSystem system_;
   TrajectoryWriter writer_;
-  std::vector<StampedPose> estimates_;  // reserved for every frame at init
+  std::vector<StampedPose> estimates_;                    // reserved for every frame at init
+  std::vector<Eigen::Matrix<double, 6, 6>> covariances_;  // the same
   LatencyStats tracking_ms_, frame_ms_;
   PoseEstimate last_pose_;
   int processed_ = 0;
   int reported_problems_ = 0;
+  std::atomic<bool> stop_requested_{false};
+  Status write_failure_;
   int64_t started_ns_ = 0, finished_ns_ = 0;
 };
 

@@ -256,6 +256,12 @@ void RunJob::print_summary() const {
       static_cast<unsigned long long>(l.queue_drops()),
       static_cast<unsigned long long>(tc.tx_frames), static_cast<unsigned long long>(tc.tx_bytes),
       static_cast<unsigned long long>(tc.drops), static_cast<unsigned long long>(tc.errors));
+  if (tc.errors > 0) {
+    // "Sent" above is what the link was given; say what the transport did not deliver, and why.
+    std::printf("link errors: %llu failed calls, %llu queued bytes lost; last: %s\n",
+                static_cast<unsigned long long>(tc.errors),
+                static_cast<unsigned long long>(tc.lost_bytes), std::strerror(tc.last_error));
+  }
   std::printf("gpio: status LED %u transitions\n", runtime_->led().transitions());
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include <Eigen/Cholesky>
 #include <Eigen/SVD>
 
 namespace rgbdtam {
@@ -228,6 +229,62 @@ FalseValidResult evaluate_false_valid(const std::vector<StampedPose>& gt,
       if (out.count++ == 0) out.first_stamp_s = est[i].stamp_s;
     }
   }
+  return out;
+}
+
+bool interpolate_pose(const std::vector<StampedPose>& gt, double t, double max_gap_s, SE3* out) {
+  const auto after = std::lower_bound(gt.begin(), gt.end(), t,
+                                      [](const StampedPose& p, double s) { return p.stamp_s < s; });
+  if (after != gt.end() && after->stamp_s == t) {
+    *out = after->T_w_c;
+    return true;
+  }
+  if (after == gt.begin() || after == gt.end()) return false;
+  const StampedPose& b = *after;
+  const StampedPose& a = *(after - 1);
+  if (b.stamp_s - a.stamp_s > max_gap_s) return false;
+  const double f = (t - a.stamp_s) / (b.stamp_s - a.stamp_s);
+  *out = SE3(a.T_w_c.quaternion().slerp(f, b.T_w_c.quaternion()),
+             (1 - f) * a.T_w_c.translation() + f * b.T_w_c.translation());
+  return true;
+}
+
+NeesResult evaluate_frame_to_frame_nees(const std::vector<StampedPose>& gt,
+                                        const std::vector<StampedPose>& est,
+                                        const std::vector<Eigen::Matrix<double, 6, 6>>& covariance,
+                                        double max_gap_s) {
+  NeesResult out;
+  const double max_gt_gap = max_gt_gap_s(stamps_of(gt));
+  std::vector<double> nees;
+  double sum_t = 0, sum_r = 0;
+  for (size_t i = 1; i < est.size() && i < covariance.size(); ++i) {
+    if (est[i].stamp_s - est[i - 1].stamp_s > max_gap_s) continue;
+    SE3 gt_prev, gt_now;
+    if (!interpolate_pose(gt, est[i - 1].stamp_s, max_gt_gap, &gt_prev) ||
+        !interpolate_pose(gt, est[i].stamp_s, max_gt_gap, &gt_now)) {
+      continue;
+    }
+    const SE3 d_est = est[i - 1].T_w_c.inverse() * est[i].T_w_c;
+    const SE3 d_gt = gt_prev.inverse() * gt_now;
+    const Vector3d e_t = (d_gt.inverse() * d_est).translation();
+    const Vector3d e_r = so3_log((d_gt.inverse() * d_est).quaternion());
+    Vector6d e;
+    e << e_t, e_r;
+    const Eigen::Matrix<double, 6, 6> c = covariance[i - 1] + covariance[i];
+    const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(c);
+    if (ldlt.info() != Eigen::Success || !c.allFinite()) continue;
+    nees.push_back(e.dot(ldlt.solve(e)));
+    sum_t += e_t.dot(c.topLeftCorner<3, 3>().ldlt().solve(e_t));
+    sum_r += e_r.dot(c.bottomRightCorner<3, 3>().ldlt().solve(e_r));
+  }
+  out.pairs = static_cast<int>(nees.size());
+  if (out.pairs == 0) return out;
+  double sum = 0;
+  for (double v : nees) sum += v;
+  out.mean = sum / out.pairs;
+  out.mean_translation = sum_t / out.pairs;
+  out.mean_rotation = sum_r / out.pairs;
+  out.median = median_of(nees);
   return out;
 }
 

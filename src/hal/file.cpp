@@ -5,15 +5,22 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 
 namespace rgbdtam {
 
 Status read_file(const char* path, uint8_t* buf, size_t capacity, size_t* size) {
-  const int fd = ::open(path, O_RDONLY | O_CLOEXEC);
+  // Non-blocking, so that a FIFO (or a device) is refused instead of waiting for a writer.
+  const int fd = ::open(path, O_RDONLY | O_CLOEXEC | O_NONBLOCK);
   if (fd < 0) {
     return Status::error(errno == ENOENT ? StatusCode::kNotFound : StatusCode::kIoError, "%s: %s",
                          path, std::strerror(errno));
+  }
+  struct stat st;
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    ::close(fd);
+    return Status::error(StatusCode::kIoError, "%s: not a regular file", path);
   }
   size_t total = 0;
   for (;;) {
@@ -67,6 +74,51 @@ Status read_text_file(const char* path, size_t max_bytes, char** text) {
   }
   *text = buf;
   return Status::ok();
+}
+
+OutputFile::~OutputFile() {
+  if (file_ != nullptr) std::fclose(file_);
+}
+
+Status OutputFile::open(const char* path, char* buffer, size_t size) {
+  if (std::snprintf(path_, sizeof(path_), "%s", path) >= static_cast<int>(sizeof(path_))) {
+    return Status::error(StatusCode::kInvalidArgument, "%s: path too long", path);
+  }
+  struct stat st;
+  direct_ = ::stat(path, &st) == 0 && !S_ISREG(st.st_mode);
+  std::snprintf(partial_, sizeof(partial_), direct_ ? "%s" : "%s.partial", path);
+  file_ = std::fopen(partial_, "wb");
+  if (file_ == nullptr) return fail("cannot create");
+  std::setvbuf(file_, buffer, _IOFBF, size);
+  status_ = Status::ok();
+  return status_;
+}
+
+Status OutputFile::fail(const char* what) {
+  if (status_.is_ok()) {
+    status_ = Status::error(StatusCode::kIoError, "%s: %s: %s", partial_, what,
+                            std::strerror(errno != 0 ? errno : EIO));
+  }
+  return status_;
+}
+
+Status OutputFile::check(bool write_ok) { return write_ok ? status_ : fail("write failed"); }
+
+Status OutputFile::flush() {
+  if (file_ != nullptr && status_.is_ok() && std::fflush(file_) != 0) return fail("write failed");
+  return status_;
+}
+
+Status OutputFile::commit() {
+  if (file_ == nullptr) return status_;
+  (void)flush();
+  const bool closed = std::fclose(file_) == 0;
+  file_ = nullptr;
+  if (!closed) (void)fail("close failed");
+  if (status_.is_ok() && !direct_ && std::rename(partial_, path_) != 0) {
+    (void)fail("cannot rename into place");
+  }
+  return status_;
 }
 
 }  // namespace rgbdtam

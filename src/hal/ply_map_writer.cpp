@@ -19,28 +19,25 @@ static_assert(sizeof(PlyVertex) == 15, "PLY vertex must be packed");
 PlyMapWriter::~PlyMapWriter() { (void)close(); }
 
 Status PlyMapWriter::open(const char* path) {
-  file_ = std::fopen(path, "wb");
-  if (file_ == nullptr) {
-    return Status::error(StatusCode::kIoError, "%s: %s", path, std::strerror(errno));
-  }
-  std::setvbuf(file_, buffer_, _IOFBF, sizeof(buffer_));
-  std::fputs(
-      "ply\nformat binary_little_endian 1.0\n"
-      "comment rgbdtam keyframe maps, back-projected, not fused; grey = intensity\n"
-      "element vertex ",
-      file_);
-  count_offset_ = std::ftell(file_);
-  std::fprintf(file_, "%0*d\n", kCountDigits, 0);
-  std::fputs(
-      "property float x\nproperty float y\nproperty float z\n"
-      "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n",
-      file_);
-  return Status::ok();
+  RGBDTAM_RETURN_IF_ERROR(file_.open(path, buffer_, sizeof(buffer_)));
+  std::FILE* f = file_.stream();
+  bool ok = std::fputs(
+                "ply\nformat binary_little_endian 1.0\n"
+                "comment rgbdtam keyframe maps, back-projected, not fused; grey = intensity\n"
+                "element vertex ",
+                f) >= 0;
+  count_offset_ = std::ftell(f);
+  ok = ok && std::fprintf(f, "%0*d\n", kCountDigits, 0) > 0 &&
+       std::fputs(
+           "property float x\nproperty float y\nproperty float z\n"
+           "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n",
+           f) >= 0;
+  return file_.check(ok);
 }
 
 void PlyMapWriter::on_keyframe_map(int64_t, const SE3& T_w_k, const PinholeIntrinsics& k,
                                    const FixedVector<FusedPixel>& pixels) {
-  if (file_ == nullptr) return;
+  if (!file_.is_open() || !file_.status().is_ok()) return;
   const Eigen::Matrix3f R = T_w_k.rotation().cast<float>();
   const Eigen::Vector3f t = T_w_k.translation().cast<float>();
   for (const FusedPixel& p : pixels) {
@@ -52,19 +49,20 @@ void PlyMapWriter::on_keyframe_map(int64_t, const SE3& T_w_k, const PinholeIntri
     const uint8_t grey =
         static_cast<uint8_t>(std::min(255.f, std::max(0.f, p.intensity * 255.f + 0.5f)));
     const PlyVertex v{p_w.x(), p_w.y(), p_w.z(), grey, grey, grey};
-    if (std::fwrite(&v, sizeof(v), 1, file_) != 1) write_failed_ = true;
+    if (!file_.check(std::fwrite(&v, sizeof(v), 1, file_.stream()) == 1).is_ok()) return;
     ++points_;
   }
+  (void)file_.flush();
 }
 
 Status PlyMapWriter::close() {
-  if (file_ == nullptr) return Status::ok();
-  bool ok =
-      !write_failed_ && std::fseek(file_, count_offset_, SEEK_SET) == 0 &&
-      std::fprintf(file_, "%0*llu", kCountDigits, static_cast<unsigned long long>(points_)) > 0;
-  ok = (std::fclose(file_) == 0) && ok;
-  file_ = nullptr;
-  return ok ? Status::ok() : Status::error(StatusCode::kIoError, "map PLY write failed");
+  if (!file_.is_open()) return file_.status();
+  // The header's count is what the file holds, even when a write failed or the run stopped.
+  std::FILE* f = file_.stream();
+  (void)file_.check(
+      std::fflush(f) == 0 && std::fseek(f, count_offset_, SEEK_SET) == 0 &&
+      std::fprintf(f, "%0*llu", kCountDigits, static_cast<unsigned long long>(points_)) > 0);
+  return file_.commit();
 }
 
 }  // namespace rgbdtam

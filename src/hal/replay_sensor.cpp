@@ -21,7 +21,11 @@ Status ReplaySensor::start(const ThreadPlacement& placement) {
 }
 
 void ReplaySensor::stop() {
-  stopping_.store(true);
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stopping_.store(true);
+  }
+  stop_requested_.notify_all();
   published_.notify_all();
   if (thread_.joinable()) thread_.join();
 }
@@ -50,7 +54,13 @@ void ReplaySensor::run() {
     while (newest + 1 < n && due_ns(newest + 1) <= now) ++newest;
     dropped_.fetch_add(static_cast<uint32_t>(newest - now_index), std::memory_order_relaxed);
     source_->skip_to(newest);
-    sleep_until_ns(due_ns(newest));
+    // Recorded gaps are replayed as they were, however long, so stopping must not wait them out.
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      stop_requested_.wait_for(lock, std::chrono::nanoseconds(due_ns(newest) - monotonic_ns()),
+                               [this] { return stopping_.load(); });
+    }
+    if (stopping_.load()) break;
     Slot& s = slots_[back_];
     const Status status = source_->next_into(&s.gray, &s.depth, &s.frame, &s.warning);
     if (!status.is_ok()) {

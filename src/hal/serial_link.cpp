@@ -87,6 +87,8 @@ size_t SerialLink::flush() {
     if (written < 0) {
       if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) break;
       ++counters_.errors;  // the port failed: what was queued is lost
+      counters_.last_error = errno;
+      counters_.lost_bytes += used_;
       used_ = 0;
       break;
     }
@@ -101,7 +103,10 @@ size_t SerialLink::flush() {
 size_t SerialLink::receive(uint8_t* bytes, size_t n) {
   const ssize_t got = ::read(fd_, bytes, n);
   if (got <= 0) {
-    if (got < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) ++counters_.errors;
+    if (got < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) {
+      ++counters_.errors;
+      counters_.last_error = errno;
+    }
     return 0;
   }
   counters_.rx_bytes += static_cast<uint64_t>(got);

@@ -108,7 +108,10 @@ Status TumRecorder::write_file(const char* relative, const uint8_t* bytes, size_
   const bool ok = write_all(fd, bytes, n);
   const int err = errno;
   if (::close(fd) != 0 || !ok) {
-    return Status::error(StatusCode::kIoError, "%s: %s", path, std::strerror(ok ? errno : err));
+    const Status failed =
+        Status::error(StatusCode::kIoError, "%s: %s", path, std::strerror(ok ? errno : err));
+    ::unlink(path);  // no half image left behind (nor listed)
+    return failed;
   }
   bytes_.fetch_add(n, std::memory_order_relaxed);
   return Status::ok();
@@ -139,12 +142,17 @@ Status TumRecorder::write_frame(const Slot& s) {
   return Status::ok();
 }
 
+void TumRecorder::keep_first_error(const Status& s) {
+  if (s.is_ok() || failed()) return;
+  error_ = s;
+  failed_.store(true, std::memory_order_release);
+}
+
 void TumRecorder::run() {
   for (;;) {
     while (Slot* s = queue_.front()) {
       const int64_t t0 = monotonic_ns();
-      const Status st = write_frame(*s);
-      if (!st.is_ok() && error_.is_ok()) error_ = st;  // keep the first; go on with the rest
+      keep_first_error(failed() ? Status::ok() : write_frame(*s));
       queue_.pop();
       per_frame_.add(monotonic_ns() - t0);
     }
@@ -163,8 +171,7 @@ Status TumRecorder::finish() {
     thread_.join();
     // Frames queued after the thread's last look.
     while (Slot* s = queue_.front()) {
-      const Status st = write_frame(*s);
-      if (!st.is_ok() && error_.is_ok()) error_ = st;
+      keep_first_error(failed() ? Status::ok() : write_frame(*s));
       queue_.pop();
     }
   }

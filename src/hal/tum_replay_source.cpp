@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <cstring>
 
+#include "rgbdtam/core/text_lines.hpp"
 #include "rgbdtam/hal/file.hpp"
 #include "rgbdtam/hal/tum_timestamp.hpp"
 
@@ -19,14 +20,15 @@ const char* skip_blanks(const char* s) {
 
 Status parse_tum_list(const char* text, const char* source, TumList* out) {
   int lines = 1;
-  for (const char* c = text; *c != '\0'; ++c) lines += *c == '\n' ? 1 : 0;
+  for (const char* c = text; *c != '\0'; ++c) lines += *c == '\n' || *c == '\r' ? 1 : 0;
   out->entries.reset(new TumListEntry[static_cast<size_t>(lines)]);
   out->size = 0;
   out->bad_lines = 0;
   int line_no = 0;
-  for (const char* line = text; *line != '\0';) {
-    const char* nl = std::strchr(line, '\n');
-    const char* end = nl != nullptr ? nl : line + std::strlen(line);
+  for (const char* line = text; line != nullptr && *line != '\0';) {
+    size_t length = 0;
+    const char* next = split_line(line, &length);
+    const char* end = line + length;
     ++line_no;
     const char* s = skip_blanks(line);
     if (s < end && *s != '#' && *s != '\r') {
@@ -57,11 +59,27 @@ Status parse_tum_list(const char* text, const char* source, TumList* out) {
         ++out->size;
       }
     }
-    line = nl != nullptr ? nl + 1 : end;
+    line = next;
   }
   std::stable_sort(
       out->entries.get(), out->entries.get() + out->size,
       [](const TumListEntry& a, const TumListEntry& b) { return a.timestamp_ns < b.timestamp_ns; });
+  // Two images at one instant: the first listed is kept, the others are reported.
+  int kept = 0;
+  for (int i = 0; i < out->size; ++i) {
+    if (kept > 0 && out->entries[i].timestamp_ns == out->entries[kept - 1].timestamp_ns) {
+      if (out->bad_lines++ == 0) {
+        char stamp[32];
+        format_seconds(out->entries[i].timestamp_ns, stamp, sizeof(stamp));
+        out->first_problem = Status::error(StatusCode::kCorrupt,
+                                           "%s: timestamp %s listed again (%s), the first kept",
+                                           source, stamp, out->entries[i].path);
+      }
+      continue;
+    }
+    out->entries[kept++] = out->entries[i];
+  }
+  out->size = kept;
   if (out->size == 0) {
     return Status::error(StatusCode::kCorrupt, "%s: no 'timestamp filename' entries", source);
   }

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "rgbdtam/core/text_lines.hpp"
+#include "rgbdtam/hal/clock.hpp"
 #include "rgbdtam/hal/file.hpp"
 #include "rgbdtam/hal/tum_replay_source.hpp"
 #include "rgbdtam/hal/tum_timestamp.hpp"
@@ -19,9 +21,10 @@ Status read_tum_trajectory(const char* path, std::vector<StampedPose>* out, int*
   RGBDTAM_RETURN_IF_ERROR(read_text_file(path, kMaxTrajectoryBytes, &text));
   out->clear();
   *bad_lines = 0;
-  for (char* line = text; *line != '\0';) {
-    char* nl = std::strchr(line, '\n');
-    if (nl != nullptr) *nl = '\0';
+  for (char* line = text; line != nullptr && *line != '\0';) {
+    size_t length = 0;
+    char* next = const_cast<char*>(split_line(line, &length));
+    line[length] = '\0';
     for (char* c = line; *c != '\0'; ++c)
       if (*c == ',' || *c == '\t') *c = ' ';
     const char* s = line;
@@ -43,7 +46,7 @@ Status read_tum_trajectory(const char* path, std::vector<StampedPose>* out, int*
         out->push_back({v[0], SE3(q, Vector3d(v[1], v[2], v[3]))});
       }
     }
-    line = nl != nullptr ? nl + 1 : line + std::strlen(line);
+    line = next;
   }
   delete[] text;
   std::stable_sort(out->begin(), out->end(), [](const StampedPose& a, const StampedPose& b) {
@@ -65,36 +68,31 @@ Status read_tum_stamps(const char* path, std::vector<double>* out) {
   return Status::ok();
 }
 
-TrajectoryWriter::~TrajectoryWriter() { (void)close(); }
-
 Status TrajectoryWriter::open(const char* path) {
-  file_ = std::fopen(path, "w");
-  if (file_ == nullptr) {
-    return Status::error(StatusCode::kIoError, "%s: %s", path, std::strerror(errno));
-  }
-  std::setvbuf(file_, buffer_, _IOFBF, sizeof(buffer_));
-  std::fputs("# timestamp tx ty tz qx qy qz qw (camera to world, every tracked frame)\n", file_);
-  return Status::ok();
+  RGBDTAM_RETURN_IF_ERROR(file_.open(path, buffer_, sizeof(buffer_)));
+  flushed_ns_ = monotonic_ns();
+  return file_.check(std::fputs("# timestamp tx ty tz qx qy qz qw (camera to world, every tracked "
+                                "frame)\n",
+                                file_.stream()) >= 0);
 }
 
 Status TrajectoryWriter::write(const PoseEstimate& pose) {
-  if (file_ == nullptr || (pose.flags & kPoseValid) == 0) return Status::ok();
+  if (!file_.is_open() || (pose.flags & kPoseValid) == 0) return file_.status();
+  RGBDTAM_RETURN_IF_ERROR(file_.status());
   char stamp[32];
   format_seconds(pose.timestamp_ns, stamp, sizeof(stamp));
   const Vector3d& t = pose.T_w_c.translation();
   const Eigen::Quaterniond& q = pose.T_w_c.quaternion();
-  if (std::fprintf(file_, "%s %.7f %.7f %.7f %.7f %.7f %.7f %.7f\n", stamp, t.x(), t.y(), t.z(),
-                   q.x(), q.y(), q.z(), q.w()) < 0) {
-    return Status::error(StatusCode::kIoError, "trajectory write failed");
-  }
-  return Status::ok();
+  RGBDTAM_RETURN_IF_ERROR(
+      file_.check(std::fprintf(file_.stream(), "%s %.7f %.7f %.7f %.7f %.7f %.7f %.7f\n", stamp,
+                               t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w()) >= 0));
+  constexpr int64_t kFlushEveryNs = 1'000'000'000;
+  const int64_t now = monotonic_ns();
+  if (now - flushed_ns_ < kFlushEveryNs) return Status::ok();
+  flushed_ns_ = now;
+  return file_.flush();
 }
 
-Status TrajectoryWriter::close() {
-  if (file_ == nullptr) return Status::ok();
-  const int rc = std::fclose(file_);
-  file_ = nullptr;
-  return rc == 0 ? Status::ok() : Status::error(StatusCode::kIoError, "trajectory close failed");
-}
+Status TrajectoryWriter::close() { return file_.commit(); }
 
 }  // namespace rgbdtam

@@ -31,6 +31,11 @@ Status UdpLink::open(const char* remote_ip, uint16_t remote_port, uint16_t local
   }
   fd_ = ::socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
   if (fd_ < 0) return Status::error(StatusCode::kIoError, "UDP socket: %s", std::strerror(errno));
+  // A ground station is often reached by broadcast (x.x.x.255, 255.255.255.255).
+  const int on = 1;
+  if (::setsockopt(fd_, SOL_SOCKET, SO_BROADCAST, &on, sizeof(on)) != 0) {
+    return Status::error(StatusCode::kIoError, "UDP broadcast: %s", std::strerror(errno));
+  }
   sockaddr_in local{};
   local.sin_family = AF_INET;
   local.sin_port = htons(local_port);
@@ -66,6 +71,7 @@ bool UdpLink::send(const uint8_t* bytes, size_t n) {
     ++counters_.drops;
   } else {
     ++counters_.errors;
+    counters_.last_error = errno;
   }
   return false;
 }
@@ -75,6 +81,7 @@ size_t UdpLink::receive(uint8_t* bytes, size_t n) {
   if (got <= 0) {
     if (got < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != ECONNREFUSED) {
       ++counters_.errors;
+      counters_.last_error = errno;
     }
     return 0;
   }

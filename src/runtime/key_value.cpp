@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "rgbdtam/core/assert.hpp"
+#include "rgbdtam/core/text_lines.hpp"
 
 namespace rgbdtam {
 namespace {
@@ -100,6 +101,15 @@ Status assign(const KeySpec& spec, const char* value, const char* where, void* t
 }
 
 Status apply_line(char* line, const char* where, const KeyTable& table, void* target, bool* seen) {
+  // Text only: a binary file is named, never echoed to the terminal.
+  for (const char* c = line; *c != '\0'; ++c) {
+    const unsigned char b = static_cast<unsigned char>(*c);
+    if ((b < 0x20 && b != '\t') || b == 0x7f) {
+      return Status::error(StatusCode::kInvalidArgument,
+                           "%s: not text (control byte 0x%02x at column %d)", where, b,
+                           static_cast<int>(c - line) + 1);
+    }
+  }
   char* hash = std::strchr(line, '#');
   if (hash != nullptr) *hash = '\0';
   char* s = trim(line);
@@ -116,7 +126,14 @@ Status apply_line(char* line, const char* where, const KeyTable& table, void* ta
   if (spec == nullptr) {
     return Status::error(StatusCode::kInvalidArgument, "%s: unknown key '%s'", where, key);
   }
-  if (seen != nullptr) seen[spec - table.specs] = true;
+  if (seen != nullptr) {
+    // In a file a second value is a mistake (which one was meant?); --set exists to override.
+    if (seen[spec - table.specs]) {
+      return Status::error(StatusCode::kInvalidArgument, "%s: key '%s' is given a second time",
+                           where, key);
+    }
+    seen[spec - table.specs] = true;
+  }
   return assign(*spec, value, where, target);
 }
 }  // namespace
@@ -126,20 +143,23 @@ Status parse_key_values(const char* text, const char* source, const KeyTable& ta
   bool seen[kMaxKeys] = {false};
   char line[kMaxLine];
   int line_no = 0;
-  const char* cursor = text;
-  while (*cursor != '\0') {
-    const char* nl = std::strchr(cursor, '\n');
-    const size_t len = nl != nullptr ? static_cast<size_t>(nl - cursor) : std::strlen(cursor);
+  for (const char* cursor = text; cursor != nullptr && *cursor != '\0';) {
+    size_t len = 0;
+    const char* next = split_line(cursor, &len);
     ++line_no;
     char where[300];
     std::snprintf(where, sizeof(where), "%s:%d", source, line_no);
+    // A comment may be any length; only what comes before it must fit.
+    const void* hash = std::memchr(cursor, '#', len);
+    if (hash != nullptr) len = static_cast<size_t>(static_cast<const char*>(hash) - cursor);
     if (len >= sizeof(line)) {
-      return Status::error(StatusCode::kInvalidArgument, "%s: line too long", where);
+      return Status::error(StatusCode::kInvalidArgument, "%s: line longer than %zu characters",
+                           where, sizeof(line) - 1);
     }
     std::memcpy(line, cursor, len);
     line[len] = '\0';
     RGBDTAM_RETURN_IF_ERROR(apply_line(line, where, table, target, seen));
-    cursor += len + (nl != nullptr ? 1 : 0);
+    cursor = next;
   }
   for (int i = 0; i < table.count; ++i) {
     if (table.specs[i].required && !seen[i]) {

@@ -6,6 +6,12 @@
 
 namespace rgbdtam {
 
+Eigen::Matrix<double, 6, 6> pose_covariance(const PoseEstimate& pose) {
+  const Eigen::FullPivLU<Eigen::Matrix<double, 6, 6>> lu(pose.information);
+  if (!lu.isInvertible()) return Eigen::Matrix<double, 6, 6>::Constant(NAN);
+  return lu.inverse();
+}
+
 SE3 camera_pose_of(const mavlink::Odometry& o, const SE3& T_b_c) {
   const SE3 T_l_b(Eigen::Quaterniond(o.q[0], o.q[1], o.q[2], o.q[3]), Vector3d(o.x, o.y, o.z));
   return T_b_c.inverse() * T_l_b * T_b_c;
@@ -67,13 +73,13 @@ mavlink::Odometry PoseLink::odometry_of(const PoseEstimate& pose) {
   previous_reset_ = pose.reset_counter;
   // The Gauss-Newton information is over a camera-frame twist (v, omega); rotate both blocks
   // into the local frame. Rotation variances are small-angle, about the local axes.
-  Eigen::FullPivLU<Eigen::Matrix<double, 6, 6>> lu(pose.information);
-  if (lu.isInvertible()) {
+  const Eigen::Matrix<double, 6, 6> cov_c = pose_covariance(pose);
+  if (cov_c.allFinite()) {
     const Matrix3d R_l_c = (config_.T_b_c * pose.T_w_c).rotation();
     Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Zero();
     A.topLeftCorner<3, 3>() = R_l_c;
     A.bottomRightCorner<3, 3>() = R_l_c;
-    const Eigen::Matrix<double, 6, 6> cov = A * lu.inverse() * A.transpose();
+    const Eigen::Matrix<double, 6, 6> cov = A * cov_c * A.transpose();
     int k = 0;
     for (int r = 0; r < 6; ++r) {
       for (int c = r; c < 6; ++c) o.pose_covariance[k++] = static_cast<float>(cov(r, c));

@@ -176,7 +176,7 @@ bool TrackingPipeline::reuse_keyframe(const Attempt& current, int64_t t_ns, Pose
   out->T_w_c = reused.T_w_c();
   out->keyframe_id = best->id;
   out->overlap = static_cast<float>(reused.r.overlap);
-  out->information = reused.r.information;
+  out->information = reused.r.information / params_.covariance_scale;
   out->flags |= kKeyframeReused;
   T_w_last_ = out->T_w_c;
   ++counters_.reused;
@@ -208,7 +208,7 @@ void TrackingPipeline::accept(const Attempt& a, const SensorFrame& frame, PoseEs
   out->photometric_sigma = static_cast<float>(r.photometric_sigma);
   out->residuals_used = r.residuals_used;
   out->iterations = r.iterations;
-  out->information = r.information;
+  out->information = r.information / params_.covariance_scale;
   out->flags |= kPoseValid;
   ++counters_.tracked;
   if ((r.terms & kPhotometricTerm) != 0) {

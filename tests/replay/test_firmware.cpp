@@ -205,6 +205,33 @@ TEST(Firmware, ASilentSensorIsReportedAsAStallAndItsReturnAsARecovery) {
   EXPECT_EQ(monitor.odometry, static_cast<int>(c.frames));
 }
 
+TEST(Firmware, StoppingDuringARecordedGapOfAYearTakesNoLongerThanAFrame) {
+  // One stamp a year late used to make the sensor thread sleep a year, and Ctrl-C join it.
+  testing::SyntheticScene scene = testing::SyntheticScene::half_resolution();
+  const std::string dir = testing::make_temp_dir("firmware_gap");
+  ASSERT_TRUE(testing::write_synthetic_sequence(dir, scene, 12, 10.0));
+  ASSERT_TRUE(testing::write_text(dir + "/camera.conf", testing::synthetic_config(scene)));
+  delay_entries(dir + "/rgb.txt", 6, 365.0 * 86400);
+  delay_entries(dir + "/depth.txt", 6, 365.0 * 86400);
+  Monitor monitor;
+  RunJob job;
+  using Clock = std::chrono::steady_clock;
+  std::atomic<int64_t> stop_requested_ns{0};
+  std::thread ctrl_c([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // well into the gap
+    stop_requested_ns = Clock::now().time_since_epoch().count();
+    job.request_stop();
+  });
+  run_board(&monitor, &job,
+            {"sensor.device=" + dir, "sensor.config=" + dir + "/camera.conf", "sensor.fps=10"});
+  const int64_t finished_ns = Clock::now().time_since_epoch().count();
+  ctrl_c.join();
+  const double stop_s = (finished_ns - stop_requested_ns.load()) * 1e-9;
+  std::printf("stopped %.3f s after the request, in a gap of a year\n", stop_s);
+  EXPECT_LT(stop_s, 2.0) << "a frame period and 100 ms, with room for a loaded machine";
+  EXPECT_LE(job.runtime().counters().frames, 6u);
+}
+
 // A transport that keeps what it is given (the link thread writes, the test reads after stop).
 class CaptureLink : public ByteLink {
  public:

@@ -10,6 +10,16 @@
 namespace rgbdtam {
 namespace {
 
+// What autopilots fuse: the reported covariance against the real frame-to-frame error. A
+// consistent 6-dof covariance gives a mean NEES of 6; within a factor of two either way.
+void expect_consistent_covariance(const testing::ReplayOutcome& out, const char* label) {
+  EXPECT_GT(out.report.nees.pairs, 100) << label;
+  EXPECT_GE(out.report.nees.mean, 3.0) << label;
+  EXPECT_LE(out.report.nees.mean, 12.0) << label;
+  std::printf("%s: frame-to-frame NEES mean %.2f, median %.2f over %d pairs\n", label,
+              out.report.nees.mean, out.report.nees.median, out.report.nees.pairs);
+}
+
 TEST(FullSequence, Fr1XyzAllFramesAteWithinOnePointFiveCentimetres) {
   const std::string seq = testing::full_fr1_xyz();
   if (seq.empty()) GTEST_SKIP() << "full fr1_xyz not present on this machine";
@@ -24,6 +34,7 @@ TEST(FullSequence, Fr1XyzAllFramesAteWithinOnePointFiveCentimetres) {
   std::printf("fr1_xyz: ATE %.2f cm over %d poses, RPE %.2f cm/s %.3f deg/s\n",
               out.report.ate.rmse_m * 100, out.report.ate.compared,
               out.report.rpe.trans_rmse_m * 100, out.report.rpe.rot_rmse_deg);
+  expect_consistent_covariance(out, "fr1_xyz");
 }
 
 // The mapping issue: the fused multi-view map must not cost accuracy. One run against one is
@@ -59,6 +70,7 @@ TEST(FullSequence, Fr3TeddyWithinOnePointFiveCentimetresAndNeverFalseValid) {
   testing::expect_tracked_or_lost(out, "fr3_teddy_200", 0.95);
   ASSERT_TRUE(out.report.ate_ok);
   EXPECT_LE(out.report.ate.rmse_m, 0.015);
+  expect_consistent_covariance(out, "fr3_teddy_200");
 }
 
 // Its stress variants: blurred along the true motion, and three times faster. Tracked or

@@ -1,6 +1,11 @@
 // The recorder: PNG encoding round trips exactly, and `rgbdtam record` of a replayed sensor
 // gives a TUM folder whose frames, values and timestamps equal the source's.
 #include <gtest/gtest.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+
+#include <csignal>
+#include <fstream>
 
 #include <random>
 #include <string>
@@ -56,14 +61,19 @@ std::vector<Frame> read_all(const std::string& folder) {
   return out;
 }
 
-TEST(Recorder, RecordingAReplayedSensorGivesTheSameFrames) {
-  const std::string out = testing::make_temp_dir("recorder") + "/recording";
-  const std::string board = testing::source_path("board/host-emulation");
+// `rgbdtam record --board board/host-emulation <out>`: the committed clip at its own rate.
+Status init_recording(RecordJob* job, const std::string& out) {
+  static const std::string board = testing::source_path("board/host-emulation");
   RunOptions options;
   options.board_dir = board.c_str();
   options.progress = false;
+  return job->init(options, out.c_str());
+}
+
+TEST(Recorder, RecordingAReplayedSensorGivesTheSameFrames) {
+  const std::string out = testing::make_temp_dir("recorder") + "/recording";
   RecordJob job;
-  ASSERT_TRUE(job.init(options, out.c_str()).is_ok());
+  ASSERT_TRUE(init_recording(&job, out).is_ok());
   ASSERT_TRUE(job.start().is_ok());
   while (job.step()) {
   }
@@ -100,6 +110,40 @@ TEST(Recorder, RefusesToOverwriteARecordingAndNamesBadFolders) {
   const Status s = bad.open("/proc/rgbdtam-cannot-write-here", 64, 48);
   ASSERT_FALSE(s.is_ok());
   EXPECT_NE(std::string(s.message()).find("/proc/rgbdtam-cannot-write-here"), std::string::npos);
+}
+
+TEST(Recorder, AWriteFailureStopsTheRecordingAndNothingUnwrittenIsListed) {
+  // A file-size limit fails writes like a full disk does, for this process only.
+  const std::string out = testing::make_temp_dir("recorder_full") + "/recording";
+  RecordJob job;
+  ASSERT_TRUE(init_recording(&job, out).is_ok());
+  rlimit old_limit;
+  ASSERT_EQ(::getrlimit(RLIMIT_FSIZE, &old_limit), 0);
+  const auto old_handler = std::signal(SIGXFSZ, SIG_IGN);  // EFBIG instead of a signal
+  rlimit small = old_limit;
+  small.rlim_cur = 150 * 1024;  // a grey PNG of the clip is about 200 KB
+  ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &small), 0);
+  ASSERT_TRUE(job.start().is_ok());
+  int steps = 0;
+  while (job.step()) ++steps;
+  const Status s = job.finish();
+  ::setrlimit(RLIMIT_FSIZE, &old_limit);
+  std::signal(SIGXFSZ, old_handler);
+  ASSERT_FALSE(s.is_ok());
+  EXPECT_NE(std::string(s.message()).find(out + "/rgb/"), std::string::npos) << s.message();
+  EXPECT_NE(std::string(s.message()).find("File too large"), std::string::npos) << s.message();
+  EXPECT_LT(steps, 45) << "the recording stopped soon after the failure";
+  // Every listed image is on disk, whole.
+  for (const char* list : {"/rgb.txt", "/depth.txt"}) {
+    std::ifstream in(out + list);
+    for (std::string line; std::getline(in, line);) {
+      if (line.empty() || line[0] == '#') continue;
+      const std::string file = out + "/" + line.substr(line.find(' ') + 1);
+      struct stat st;
+      EXPECT_TRUE(::stat(file.c_str(), &st) == 0 && st.st_size > 0) << file;
+    }
+  }
+  std::printf("stopped after %d frames: %s\n", steps, s.message());
 }
 
 }  // namespace

@@ -35,6 +35,7 @@ ReplayOutcome replay_and_evaluate(const std::string& sequence, const std::string
     stamps.push_back(job.source().rgb_list().entries[i].timestamp_ns * 1e-9);
   }
   out.report = evaluate_all(gt, job.estimates(), &stamps);
+  out.report.nees = evaluate_frame_to_frame_nees(gt, job.estimates(), job.covariances());
   out.counters = job.counters();
   out.tracking_median_ms = job.tracking_time().percentile_ms(0.5);
   out.ran = true;

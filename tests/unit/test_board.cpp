@@ -4,6 +4,7 @@
 
 #include <string>
 
+#include "config_text.hpp"
 #include "rgbdtam/hal/file.hpp"
 #include "rgbdtam/runtime/board.hpp"
 #include "test_paths.hpp"
@@ -68,28 +69,30 @@ TEST(Board, BadBoardsAreClearErrors) {
   ASSERT_TRUE(parse_board(kMinimal, "ok.conf", "board/ok", &ok).is_ok());
   ASSERT_TRUE(validate_board(ok).is_ok());
   expect_error("board.name = x\n", "missing required key 'build.preset'");
-  expect_error(std::string(kMinimal) + "sensor.kind = kinect2\n", "sensor.kind 'kinect2'");
-  expect_error(std::string(kMinimal) + "link.kind = can\n", "link.kind 'can'");
-  expect_error(std::string(kMinimal) + "link.udp_remote = 127.0.0.1\n", "link.udp_remote");
-  expect_error(std::string(kMinimal) + "link.udp_remote = 127.0.0.1:70000\n", "link.udp_remote");
-  expect_error(std::string(kMinimal) + "link.kind = serial\n", "link.serial_device");
-  expect_error(std::string(kMinimal) + "link.baud = 50\n", "bad.conf:9: key 'link.baud'");
-  expect_error(std::string(kMinimal) + "threads.mapper_cpu = 2\n",
+  expect_error(testing::with_changes(kMinimal, "sensor.kind = kinect2\n"), "sensor.kind 'kinect2'");
+  expect_error(testing::with_changes(kMinimal, "link.kind = can\n"), "link.kind 'can'");
+  expect_error(testing::with_changes(kMinimal, "link.udp_remote = 127.0.0.1\n"), "link.udp_remote");
+  expect_error(testing::with_changes(kMinimal, "link.udp_remote = 127.0.0.1:70000\n"),
+               "link.udp_remote");
+  expect_error(testing::with_changes(kMinimal, "link.kind = serial\n"), "link.serial_device");
+  expect_error(testing::with_changes(kMinimal, "link.baud = 50\n"), "bad.conf:9: key 'link.baud'");
+  expect_error(testing::with_changes(kMinimal, "threads.mapper_cpu = 2\n"),
                "threads.mapper_cpu is 2, but the board has 2 CPUs");
-  expect_error(std::string(kMinimal) + "gpio.led_line = 3\n", "gpio.chip is empty");
-  expect_error(std::string(kMinimal) + "link.T_b_c = 1 0 0\n", "link.T_b_c");
-  expect_error(std::string(kMinimal) + "link.T_b_c = 2 0 0 0 0 0 0\n", "link.T_b_c");
-  expect_error(std::string(kMinimal) + "link.T_b_c = nan 0 0 0 0 0 0\n", "link.T_b_c");
-  expect_error(std::string(kMinimal) + "link.T_b_c = 1 0 0 0 0 inf 0\n", "link.T_b_c");
-  expect_error(std::string(kMinimal) + "threads.link_priority = 120\n", "out of range");
-  expect_error(std::string(kMinimal) + "gpio.led_pin = 3\n", "unknown key 'gpio.led_pin'");
-  expect_error(std::string(kMinimal) + "sensor.usb_id = kinect\n", "sensor.usb_id 'kinect'");
-  expect_error(std::string(kMinimal) + "sensor.depth = metric\n", "sensor.depth 'metric'");
+  expect_error(testing::with_changes(kMinimal, "gpio.led_line = 3\n"), "gpio.chip is empty");
+  expect_error(testing::with_changes(kMinimal, "link.T_b_c = 1 0 0\n"), "link.T_b_c");
+  expect_error(testing::with_changes(kMinimal, "link.T_b_c = 2 0 0 0 0 0 0\n"), "link.T_b_c");
+  expect_error(testing::with_changes(kMinimal, "link.T_b_c = nan 0 0 0 0 0 0\n"), "link.T_b_c");
+  expect_error(testing::with_changes(kMinimal, "link.T_b_c = 1 0 0 0 0 inf 0\n"), "link.T_b_c");
+  expect_error(testing::with_changes(kMinimal, "threads.link_priority = 120\n"), "out of range");
+  expect_error(testing::with_changes(kMinimal, "gpio.led_pin = 3\n"), "unknown key 'gpio.led_pin'");
+  expect_error(testing::with_changes(kMinimal, "sensor.usb_id = kinect\n"),
+               "sensor.usb_id 'kinect'");
+  expect_error(testing::with_changes(kMinimal, "sensor.depth = metric\n"), "sensor.depth 'metric'");
 }
 
 TEST(Board, CapacityOverridesAreCheckedLikeParams) {
   Board b;
-  ASSERT_TRUE(parse_board((std::string(kMinimal) + "capacity.keyframe_pool = 4\n").c_str(),
+  ASSERT_TRUE(parse_board((testing::with_changes(kMinimal, "capacity.keyframe_pool = 4\n")).c_str(),
                           "small.conf", "board/small", &b)
                   .is_ok());
   Params p;

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "rgbdtam/core/evaluation.hpp"
 
@@ -142,6 +143,38 @@ TEST(FalseValid, RotationLimitIsFiveDegrees) {
     EXPECT_NEAR(r.worst_rotation_deg, deg, 1e-6);
     EXPECT_EQ(r.count, deg > 5.0 ? 12 : 0);
   }
+}
+
+TEST(Nees, AveragesSixWhenTheCovarianceIsTrueAndScalesWithIt) {
+  // Ground truth at 100 Hz along a curve; estimates at every third sample, each perturbed in
+  // its camera frame by noise drawn from C. The frame-to-frame error then has covariance 2C
+  // (to first order), which is what the evaluation assumes from the two reported C.
+  std::vector<StampedPose> gt, est;
+  std::vector<Eigen::Matrix<double, 6, 6>> cov;
+  Eigen::Matrix<double, 6, 6> C = Eigen::Matrix<double, 6, 6>::Zero();
+  C.diagonal() << 4e-6, 1e-6, 9e-6, 1e-6, 4e-6, 2.5e-7;  // 1-3 mm, 0.03-0.11 degrees
+  C(0, 4) = C(4, 0) = 1e-6;                              // sideways motion and turning, correlated
+  const Eigen::Matrix<double, 6, 6> L = C.llt().matrixL();
+  std::mt19937 rng(11);
+  std::normal_distribution<double> n01;
+  for (int i = 0; i < 6000; ++i) {
+    const double t = i * 0.01;
+    gt.push_back({t, SE3(so3_exp(Vector3d(0.1 * std::sin(t), 0.2 * t, 0)),
+                         Vector3d(0.3 * std::sin(0.5 * t), 0.1 * t, 0.05 * std::cos(t)))});
+    if (i % 3 != 0) continue;
+    Vector6d xi;
+    for (int k = 0; k < 6; ++k) xi[k] = n01(rng);
+    const Vector6d noise = L * xi;
+    const SE3 perturbation(so3_exp(noise.tail<3>()), noise.head<3>());
+    est.push_back({t, gt.back().T_w_c * perturbation});
+    cov.push_back(C);
+  }
+  const NeesResult consistent = evaluate_frame_to_frame_nees(gt, est, cov);
+  EXPECT_EQ(consistent.pairs, 1999);
+  EXPECT_NEAR(consistent.mean, 6.0, 0.6);
+  EXPECT_NEAR(consistent.mean_translation, 3.0, 0.4);
+  for (auto& c : cov) c *= 4.0;  // four times too cautious: a quarter of the NEES
+  EXPECT_NEAR(evaluate_frame_to_frame_nees(gt, est, cov).mean, 1.5, 0.15);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "config_text.hpp"
 #include "rgbdtam/hal/file.hpp"
 #include "rgbdtam/runtime/params.hpp"
 #include "test_paths.hpp"
@@ -45,11 +46,12 @@ TEST(Params, EveryShippedConfigLoads) {
 
 TEST(Params, ValuesAndDefaults) {
   Params p;
-  ASSERT_TRUE(parse(std::string(kMinimal) +
-                        "tracker.residuals = GIDD*  # comment\n"
-                        "tracker.motion_model = false\ndepth.max_rgb_dt_ms = 15\n",
-                    &p)
-                  .is_ok());
+  ASSERT_TRUE(
+      parse(testing::with_changes(kMinimal,
+                                  "tracker.residuals = GIDD*  # comment\n"
+                                  "tracker.motion_model = false\ndepth.max_rgb_dt_ms = 15\n"),
+            &p)
+          .is_ok());
   EXPECT_EQ(p.camera.fx_px, 500.0);
   EXPECT_EQ(p.sensor.depth_factor, 1000.0);
   EXPECT_FALSE(p.tracker.motion_model);
@@ -71,51 +73,71 @@ void expect_error(const std::string& text, const char* must_contain) {
 }
 
 TEST(Params, BadValuesNameTheFileAndTheKey) {
-  expect_error(std::string(kMinimal) + "tracker.robust_cc = 2\n",
+  expect_error(testing::with_changes(kMinimal, "tracker.robust_cc = 2\n"),
                "unknown key 'tracker.robust_cc'");
-  expect_error(std::string(kMinimal) + "camera.fx =\n", "'camera.fx' has no value");
-  expect_error(std::string(kMinimal) + "tracker.keyframe_overlap = 1.5\n",
+  expect_error(testing::with_changes(kMinimal, "camera.fx =\n"), "'camera.fx' has no value");
+  expect_error(testing::with_changes(kMinimal, "tracker.keyframe_overlap = 1.5\n"),
                "'tracker.keyframe_overlap'");
-  expect_error(std::string(kMinimal) + "tracker.keyframe_overlap = 1.5\n", "out of range");
-  expect_error(std::string(kMinimal) + "camera.fx = five hundred\n", "is not a number");
-  expect_error(std::string(kMinimal) + "map.keyframe_pool = 3.5\n", "not a whole number");
-  expect_error(std::string(kMinimal) + "tracker.motion_model = maybe\n", "true/false");
-  expect_error(std::string(kMinimal) + "tracker.residuals = PX+GIDD\n",
+  expect_error(testing::with_changes(kMinimal, "tracker.keyframe_overlap = 1.5\n"), "out of range");
+  expect_error(testing::with_changes(kMinimal, "camera.fx = five hundred\n"), "is not a number");
+  expect_error(testing::with_changes(kMinimal, "map.keyframe_pool = 3.5\n"), "not a whole number");
+  expect_error(testing::with_changes(kMinimal, "tracker.motion_model = maybe\n"), "true/false");
+  expect_error(testing::with_changes(kMinimal, "tracker.residuals = PX+GIDD\n"),
                "'PX+GIDD' is not valid (PS, PD");
-  expect_error(std::string(kMinimal) + "just some words\n", "expected 'key = value'");
+  expect_error(testing::with_changes(kMinimal, "just some words\n"), "expected 'key = value'");
   expect_error("camera.width = 640\n", "missing required key");
-  expect_error(std::string(kMinimal) + "camera.width = 636\n", "divisible by 8");
-  expect_error(std::string(kMinimal) + "depth.min = 4\ndepth.max = 2\n", "'depth.min'");
-  expect_error(std::string(kMinimal) + "camera.fx = nan\n", "is not a number");
-  expect_error(std::string(kMinimal) + "map.enabled = true\nmap.keyframe_pool = 6\n",
+  expect_error(testing::with_changes(kMinimal, "camera.width = 636\n"), "divisible by 8");
+  expect_error(testing::with_changes(kMinimal, "depth.min = 4\ndepth.max = 2\n"), "'depth.min'");
+  expect_error(testing::with_changes(kMinimal, "camera.fx = nan\n"), "is not a number");
+  expect_error(testing::with_changes(kMinimal, "map.enabled = true\nmap.keyframe_pool = 6\n"),
                "'map.keyframe_pool'");
 }
 
 TEST(Params, HealthLimitsAreReadInTheirUnits) {
   Params p;
-  ASSERT_TRUE(parse(std::string(kMinimal) +
-                        "health.max_rotation_rate = 180\nhealth.max_speed = 2\n"
-                        "health.max_rotation_std = 1\nhealth.reset_after_lost_ms = 250\n"
-                        "tracker.keyframe_parallax = 0.2\n",
-                    &p)
-                  .is_ok());
+  ASSERT_TRUE(
+      parse(testing::with_changes(kMinimal,
+                                  "health.max_rotation_rate = 180\nhealth.max_speed = 2\n"
+                                  "health.max_rotation_std = 1\nhealth.reset_after_lost_ms = 250\n"
+                                  "tracker.keyframe_parallax = 0.2\n"),
+            &p)
+          .is_ok());
   EXPECT_DOUBLE_EQ(p.health.max_rotation_rate_rad_s, M_PI);  // written in degrees per second
   EXPECT_DOUBLE_EQ(p.health.max_rotation_std_rad, M_PI / 180.0);
   EXPECT_EQ(p.health.max_speed_m_s, 2.0);
   EXPECT_EQ(p.reset_after_lost_ns, 250'000'000);
   EXPECT_EQ(p.tracker.keyframe_parallax, 0.2);
-  expect_error(std::string(kMinimal) + "health.min_inliers = 1.5\n", "out of range");
-  expect_error(std::string(kMinimal) + "health.max_speed = inf\n", "is not a number");
+  expect_error(testing::with_changes(kMinimal, "health.min_inliers = 1.5\n"), "out of range");
+  expect_error(testing::with_changes(kMinimal, "health.max_speed = inf\n"), "is not a number");
   // Keys that were replaced are errors, not silently ignored.
-  expect_error(std::string(kMinimal) + "tracker.lost_frames_before_reset = 10\n",
+  expect_error(testing::with_changes(kMinimal, "tracker.lost_frames_before_reset = 10\n"),
                "unknown key 'tracker.lost_frames_before_reset'");
 }
 
 TEST(Params, ErrorsGiveTheLineNumber) {
   Params p;
-  const Status s = parse(std::string(kMinimal) + "\n# fine\nbogus = 1\n", &p);
+  const Status s = parse(testing::with_changes(kMinimal, "\n# fine\nbogus = 1\n"), &p);
   ASSERT_FALSE(s.is_ok());
   EXPECT_NE(std::string(s.message()).find("test.conf:10"), std::string::npos) << s.message();
+}
+
+TEST(Params, AnyLineEndingsLongCommentsAndNoKeyTwice) {
+  Params p;
+  std::string cr_only = testing::with_changes(kMinimal, "camera.fx = 525\n");
+  for (char& c : cr_only) c = c == '\n' ? '\r' : c;
+  ASSERT_TRUE(parse(cr_only, &p).is_ok()) << "old Mac line endings";
+  EXPECT_EQ(p.camera.fx_px, 525.0);
+  ASSERT_TRUE(parse("# " + std::string(600, '-') + "\r\n" + kMinimal, &p).is_ok())
+      << "a comment of any length, CRLF endings";
+  const Status twice = parse(std::string(kMinimal) + "camera.fx = 525\n", &p);
+  ASSERT_FALSE(twice.is_ok());
+  EXPECT_NE(std::string(twice.message()).find("test.conf:8: key 'camera.fx' is given a second"),
+            std::string::npos)
+      << twice.message();
+  expect_error(std::string(kMinimal) + "camera.cx = 3" + std::string(600, '0') + "\n",
+               "test.conf:8: line longer than");
+  expect_error(std::string(kMinimal) + "\x7f" + "ELF\x02\x01\n",
+               "test.conf:8: not text (control byte 0x7f");
 }
 
 TEST(Params, OverridesAndPrintRoundTrip) {

@@ -6,6 +6,7 @@
 #include <pty.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <vector>
@@ -245,6 +246,32 @@ TEST(PoseLink, BadTransportSettingsAreErrorsNotCrashes) {
   EXPECT_FALSE(not_a_tty.open("/dev/null", 115200).is_ok());
   UdpLink udp;
   EXPECT_FALSE(udp.open("localhost", 14550, 0).is_ok());  // numeric addresses only
+}
+
+TEST(PoseLink, UdpBroadcastIsAllowed) {
+  // Without SO_BROADCAST every frame to 255.255.255.255 failed with EACCES, unreported.
+  UdpLink udp;
+  ASSERT_TRUE(udp.open("255.255.255.255", 14599, 0).is_ok());
+  const uint8_t frame[8] = {0xfd};
+  udp.send(frame, sizeof(frame));
+  EXPECT_NE(udp.counters().last_error, EACCES);
+}
+
+TEST(PoseLink, ASerialPortWhoseReaderLeftCountsWhatWasLostAndWhy) {
+  int master = -1, slave = -1;
+  ASSERT_EQ(::openpty(&master, &slave, nullptr, nullptr, nullptr), 0);
+  char name[64];
+  ASSERT_EQ(::ttyname_r(slave, name, sizeof(name)), 0);
+  SerialLink serial;
+  ASSERT_TRUE(serial.open(name, 115200).is_ok());
+  ::close(slave);
+  ::close(master);  // the reader is gone: writes fail with EIO
+  const uint8_t frame[64] = {0xfd};
+  for (int i = 0; i < 3; ++i) serial.send(frame, sizeof(frame));
+  serial.flush();
+  EXPECT_GT(serial.counters().errors, 0u);
+  EXPECT_EQ(serial.counters().last_error, EIO);
+  EXPECT_GT(serial.counters().lost_bytes, 0u);
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // Replay input: TUM lists, timestamps, PNG decoding, and bad input of every kind reported
 // and skipped, never a crash.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <unistd.h>
 
@@ -58,6 +59,15 @@ TEST(TumList, SkipsCommentsAndCountsBadLines) {
   EXPECT_EQ(list.size, 1);
   EXPECT_EQ(list.bad_lines, 3);
   EXPECT_NE(std::string(list.first_problem.message()).find("rgb.txt:2: timestamp out of range"),
+            std::string::npos)
+      << list.first_problem.message();
+  // Old Mac line endings read every line; a stamp listed twice keeps its first image.
+  ASSERT_TRUE(
+      parse_tum_list("1.0 a.png\r2.0 b.png\r2.0 c.png\r3.0 d.png", "rgb.txt", &list).is_ok());
+  EXPECT_EQ(list.size, 3);
+  EXPECT_EQ(list.bad_lines, 1);
+  EXPECT_STREQ(list.entries[1].path, "b.png");
+  EXPECT_NE(std::string(list.first_problem.message()).find("2.000000 listed again (c.png)"),
             std::string::npos)
       << list.first_problem.message();
 }
@@ -214,6 +224,19 @@ TEST(ReplaySource, MissingFolderIsAClearError) {
   const Status s = src.open("/nonexistent/sequence", 640, 480, 20'000'000, 0);
   ASSERT_FALSE(s.is_ok());
   EXPECT_NE(std::string(s.message()).find("/nonexistent/sequence/rgb.txt"), std::string::npos);
+}
+
+TEST(ReplaySource, AFifoInPlaceOfAFileIsRefusedNotWaitedOn) {
+  // Opening a FIFO for reading blocks until a writer comes: replay used to hang there.
+  const std::string dir = testing::make_temp_dir("fifo");
+  ASSERT_EQ(::mkfifo((dir + "/rgb.txt").c_str(), 0644), 0);
+  TumReplaySource src;
+  const Status s = src.open(dir.c_str(), 640, 480, 20'000'000, 0);
+  ASSERT_FALSE(s.is_ok());
+  EXPECT_NE(std::string(s.message()).find("rgb.txt: not a regular file"), std::string::npos)
+      << s.message();
+  char* text = nullptr;
+  EXPECT_FALSE(read_text_file("/dev/zero", 1 << 20, &text).is_ok());
 }
 
 }  // namespace

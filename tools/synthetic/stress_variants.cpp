@@ -204,18 +204,7 @@ class Trajectory {
     std::sort(gaps.begin(), gaps.end());
     max_gap_s_ = gaps.empty() ? 0.0 : 2.0 * gaps[gaps.size() / 2];
   }
-  bool at(double t, SE3* T) const {
-    auto it = std::lower_bound(poses_.begin(), poses_.end(), t,
-                               [](const StampedPose& p, double s) { return p.stamp_s < s; });
-    if (it == poses_.begin() || it == poses_.end()) return false;
-    const StampedPose& b = *it;
-    const StampedPose& a = *(it - 1);
-    if (b.stamp_s - a.stamp_s > max_gap_s_) return false;
-    const double f = (t - a.stamp_s) / (b.stamp_s - a.stamp_s);
-    *T = SE3(a.T_w_c.quaternion().slerp(f, b.T_w_c.quaternion()),
-             (1 - f) * a.T_w_c.translation() + f * b.T_w_c.translation());
-    return true;
-  }
+  bool at(double t, SE3* T) const { return interpolate_pose(poses_, t, max_gap_s_, T); }
 
  private:
   std::vector<StampedPose> poses_;

@@ -65,4 +65,23 @@ FalseValidResult evaluate_false_valid(const std::vector<StampedPose>& gt,
                                       const std::vector<StampedPose>& est,
                                       const FalseValidLimits& limits = FalseValidLimits());
 
+// The ground truth at t: linear in position, slerped in rotation, between the samples that
+// bracket t; false when there are none or they are more than max_gap_s apart.
+bool interpolate_pose(const std::vector<StampedPose>& gt, double t, double max_gap_s, SE3* out);
+
+// The normalised estimation error squared (NEES) of frame-to-frame motion, ours: for each
+// pair of consecutive estimates at most max_gap_s apart, e = log(D_gt^-1 D_est) with
+// D = P_{i-1}^-1 P_i, (translation, rotation) in camera i, against the covariance
+// C_{i-1} + C_i of the two poses' reported covariances (same order, camera frame). Ground truth
+// is interpolated at the estimates' stamps. A consistent covariance averages 6.
+struct NeesResult {
+  int pairs = 0;
+  double mean = 0, median = 0;
+  double mean_translation = 0, mean_rotation = 0;  // the 3-dof parts, each consistent at 3
+};
+NeesResult evaluate_frame_to_frame_nees(const std::vector<StampedPose>& gt,
+                                        const std::vector<StampedPose>& est,
+                                        const std::vector<Eigen::Matrix<double, 6, 6>>& covariance,
+                                        double max_gap_s = 0.1);
+
 }  // namespace rgbdtam

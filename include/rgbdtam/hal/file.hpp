@@ -2,8 +2,10 @@
 // Whole-file reads into caller-owned buffers, through open/read so that no stdio buffer
 // is allocated.
 
+#include <climits>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 
 #include "rgbdtam/core/status.hpp"
 
@@ -13,5 +15,33 @@ namespace rgbdtam {
 Status read_file(const char* path, uint8_t* buf, size_t capacity, size_t* size);
 // Init-time helper: reads a text file into a new NUL-terminated buffer of at most max_bytes.
 Status read_text_file(const char* path, size_t max_bytes, char** text);
+
+// An output file written as `<path>.partial` and renamed to `path` when complete, so that a
+// reader never finds half a file under the real name and an interrupted one is still there.
+// A path that exists and is not a regular file (a device, a FIFO) is written directly. The
+// first failure is kept, naming the file and the reason.
+class OutputFile {
+ public:
+  ~OutputFile();  // unfinished: closed and left as .partial
+  // buffer: the stdio buffer, owned by the caller (no allocation after open).
+  Status open(const char* path, char* buffer, size_t size);
+  bool is_open() const { return file_ != nullptr; }
+  std::FILE* stream() { return file_; }
+  // After a write through stream(): records the failure, if any, and returns the first one.
+  Status check(bool write_ok);
+  Status flush();
+  // Flushes, closes and renames into place; the first failure, if any.
+  Status commit();
+  const Status& status() const { return status_; }
+  const char* path() const { return path_; }
+
+ private:
+  Status fail(const char* what);
+  std::FILE* file_ = nullptr;
+  bool direct_ = false;
+  char path_[PATH_MAX] = "";
+  char partial_[PATH_MAX + 16] = "";
+  Status status_;
+};
 
 }  // namespace rgbdtam

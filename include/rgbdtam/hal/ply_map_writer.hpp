@@ -1,11 +1,13 @@
 #pragma once
 // Streams every keyframe's map into one binary PLY, as the paper's Figure 1 shows it: each
 // keyframe's edge points back-projected with its own pose, not fused, coloured by intensity.
-// The vertex count is patched into the header when the file is closed.
+// The vertex count is patched into the header when the file is closed, which renames it into
+// place (hal/file.hpp OutputFile); each keyframe's points are flushed as they come.
 
 #include <cstdio>
 
 #include "rgbdtam/core/status.hpp"
+#include "rgbdtam/hal/file.hpp"
 #include "rgbdtam/runtime/mapping.hpp"
 
 namespace rgbdtam {
@@ -18,12 +20,13 @@ class PlyMapWriter : public MapSink {
                        const FixedVector<FusedPixel>& pixels) override;
   Status close();
   uint64_t points() const { return points_; }
+  // The first write failure, naming the file and the reason.
+  const Status& status() const { return file_.status(); }
 
  private:
-  std::FILE* file_ = nullptr;
+  OutputFile file_;
   long count_offset_ = 0;
   uint64_t points_ = 0;
-  bool write_failed_ = false;
   char buffer_[1 << 16];
 };
 

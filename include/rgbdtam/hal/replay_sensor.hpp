@@ -57,6 +57,7 @@ class ReplaySensor : public LiveSensor {
   Status error_;
   std::mutex mutex_;
   std::condition_variable published_;
+  std::condition_variable stop_requested_;  // wakes the replay thread out of a gap at once
   std::atomic<bool> stopping_{false};
   std::atomic<uint32_t> dropped_{0};
   std::thread thread_;

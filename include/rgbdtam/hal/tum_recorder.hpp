@@ -37,6 +37,8 @@ class TumRecorder {
   bool push(const SensorFrame& frame);
   // Writes what is queued, joins, closes the lists; the first write error, if any.
   Status finish();
+  // A write failed (a full disk, a lost mount): nothing more is written; finish() says why.
+  bool failed() const { return failed_.load(std::memory_order_acquire); }
 
   RecorderCounters counters() const;
   const LatencyStats& time_per_frame() const { return per_frame_; }
@@ -50,6 +52,7 @@ class TumRecorder {
     bool has_depth = false;
   };
   void run();
+  void keep_first_error(const Status& s);  // and stop writing
   Status write_frame(const Slot& s);
   Status write_file(const char* relative, const uint8_t* bytes, size_t n);
   // Writes the encoder's output as <folder>/<stamp>.png and lists it.
@@ -65,6 +68,7 @@ class TumRecorder {
   std::atomic<uint32_t> written_{0}, depth_written_{0}, dropped_{0};
   std::atomic<uint64_t> bytes_{0};
   Status error_;
+  std::atomic<bool> failed_{false};
   std::thread thread_;
   std::mutex mutex_;
   std::condition_variable wake_;

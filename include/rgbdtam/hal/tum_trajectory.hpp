@@ -6,6 +6,7 @@
 
 #include "rgbdtam/core/evaluation.hpp"
 #include "rgbdtam/core/status.hpp"
+#include "rgbdtam/hal/file.hpp"
 #include "rgbdtam/runtime/messages.hpp"
 
 namespace rgbdtam {
@@ -15,16 +16,20 @@ Status read_tum_trajectory(const char* path, std::vector<StampedPose>* out, int*
 // Timestamps of an rgb.txt-style list, in seconds.
 Status read_tum_stamps(const char* path, std::vector<double>* out);
 
-// Streams one line per valid pose through a buffer owned by the writer; no allocation.
+// Streams one line per valid pose through a buffer owned by the writer; no allocation. The
+// lines reach the disk at least once a second (an interrupted run keeps them, as
+// `<path>.partial`); close() renames the file into place.
 class TrajectoryWriter {
  public:
-  ~TrajectoryWriter();
   Status open(const char* path);
+  // The first write failure, naming the file and the reason; every later write returns it too.
   Status write(const PoseEstimate& pose);
   Status close();
+  const char* path() const { return file_.path(); }
 
  private:
-  std::FILE* file_ = nullptr;
+  OutputFile file_;
+  int64_t flushed_ns_ = 0;
   char buffer_[1 << 16];
 };
 

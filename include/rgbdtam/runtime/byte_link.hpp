@@ -11,8 +11,10 @@ struct LinkCounters {
   uint64_t tx_frames = 0;  // whole frames handed to the transport
   uint64_t tx_bytes = 0;
   uint64_t rx_bytes = 0;
-  uint64_t drops = 0;   // frames refused because the transport could not take them now
-  uint64_t errors = 0;  // failed system calls (the frame is lost)
+  uint64_t drops = 0;       // frames refused because the transport could not take them now
+  uint64_t errors = 0;      // failed system calls (the frame is lost)
+  int last_error = 0;       // errno of the latest, for the report
+  uint64_t lost_bytes = 0;  // queued but never written: the transport failed under them
 };
 
 class ByteLink {

@@ -36,6 +36,11 @@ struct Params {
   RadTanDistortion distortion;
   SensorModel sensor;
   TrackerOptions tracker;
+  // The reported pose covariance is this times the inverse of the Gauss-Newton information,
+  // which counts every residual as independent evidence; neighbouring pixels are not, and the
+  // keyframe's depth errors are shared by all frames. Calibrated so that the frame-to-frame
+  // NEES averages about 6 (README, "Reported covariance").
+  double covariance_scale = 5000.0;
   int keyframe_pool_size = 32;
   int reuse_candidates = 2;  // nearest earlier keyframes tried before creating a new one
   HealthLimits health;       // what a pose must pass to be reported valid

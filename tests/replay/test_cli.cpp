@@ -1,0 +1,121 @@
+// The rgbdtam command line as a user meets it: exit codes that say whether the job was done,
+// outputs that never replace inputs, Ctrl-C that ends a replay with complete outputs, and
+// write failures reported at once with the file and the reason.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "stress_variants.hpp"
+#include "test_paths.hpp"
+
+namespace rgbdtam {
+namespace {
+
+struct Outcome {
+  int exit_code = -1;
+  std::string err;
+};
+
+// Runs `rgbdtam <args>` through the shell; stdout is discarded, stderr kept.
+Outcome rgbdtam(const std::string& args, const std::string& wrapper = "") {
+  const std::string err_path = testing::make_temp_dir("cli_err") + "/stderr.txt";
+  const std::string command =
+      wrapper + " " RGBDTAM_BINARY " " + args + " > /dev/null 2> " + err_path;
+  const int status = std::system(command.c_str());
+  Outcome o;
+  o.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream in(err_path);
+  std::stringstream text;
+  text << in.rdbuf();
+  o.err = text.str();
+  return o;
+}
+
+std::string clip() { return testing::source_path("data/tum_fr1_xyz_clip"); }
+std::string config() { return testing::source_path("config/tum_fr1.conf"); }
+
+std::string read_all(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+bool exists(const std::string& path) {
+  struct stat st;
+  return ::stat(path.c_str(), &st) == 0;
+}
+
+TEST(Cli, ABadFrameCountIsAUsageError) {
+  const Outcome o = rgbdtam("replay " + clip() + " --config " + config() + " --max-frames abc");
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_NE(o.err.find("--max-frames needs a whole number of frames, got 'abc'"), std::string::npos)
+      << o.err;
+}
+
+TEST(Cli, AnOutputThatIsAnInputIsRefusedAndTheInputKept) {
+  const std::string dir = testing::make_temp_dir("cli_inputs");
+  ASSERT_EQ(std::system(("cp -r " + clip() + " " + dir + "/seq").c_str()), 0);
+  const std::string gt = dir + "/seq/groundtruth.txt";
+  const std::string before = read_all(gt);
+  Outcome o = rgbdtam("replay " + dir + "/seq --config " + config() + " --trajectory " + gt);
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_NE(o.err.find("is an input of this run"), std::string::npos) << o.err;
+  EXPECT_EQ(read_all(gt), before);
+  o = rgbdtam("replay " + dir + "/seq --config " + config() + " --map " + dir + "/seq/rgb.txt");
+  EXPECT_EQ(o.exit_code, 2);
+}
+
+TEST(Cli, OutputsAppearWhenCompleteAndAFullDiskIsNamed) {
+  const std::string dir = testing::make_temp_dir("cli_outputs");
+  Outcome o = rgbdtam("replay " + clip() + " --config " + config() + " --trajectory " + dir +
+                      "/t.txt --map " + dir + "/m.ply");
+  EXPECT_EQ(o.exit_code, 0) << o.err;
+  EXPECT_TRUE(exists(dir + "/t.txt") && exists(dir + "/m.ply"));
+  EXPECT_FALSE(exists(dir + "/t.txt.partial") || exists(dir + "/m.ply.partial"));
+  o = rgbdtam("replay " + clip() + " --config " + config() + " --trajectory /dev/full");
+  EXPECT_EQ(o.exit_code, 1);
+  EXPECT_NE(o.err.find("/dev/full: write failed: No space left on device"), std::string::npos)
+      << o.err;
+}
+
+TEST(Cli, NoPoseAtAllIsAFailedRun) {
+  const std::string dir = testing::make_temp_dir("cli_noise");
+  ASSERT_TRUE(testing::noise_sequence(clip(), dir + "/noise", config(), "depth", 5));
+  const Outcome o = rgbdtam("replay " + dir + "/noise --config " + config());
+  EXPECT_EQ(o.exit_code, 1);
+  EXPECT_NE(o.err.find("no frame was tracked"), std::string::npos) << o.err;
+}
+
+TEST(Cli, CtrlCEndsAReplayWithCompleteOutputs) {
+  const std::string seq = testing::full_fr1_xyz();
+  if (seq.empty()) GTEST_SKIP() << "no full fr1_xyz on this machine";
+  const std::string dir = testing::make_temp_dir("cli_sigint");
+  const Outcome o = rgbdtam("replay " + seq + " --config " + config() + " --trajectory " + dir +
+                                "/t.txt --map " + dir + "/m.ply",
+                            "timeout --preserve-status -s INT 2");
+  EXPECT_EQ(o.exit_code, 130) << o.err;
+  EXPECT_NE(o.err.find("interrupted after"), std::string::npos) << o.err;
+  const std::string trajectory = read_all(dir + "/t.txt");
+  int lines = 0;
+  for (char c : trajectory) lines += c == '\n';
+  EXPECT_GT(lines, 2) << "the poses up to the interruption";
+  EXPECT_EQ(trajectory.back(), '\n') << "no half line";
+  // The PLY's header counts exactly the vertices it holds.
+  const std::string ply = read_all(dir + "/m.ply");
+  const size_t count_at = ply.find("element vertex ");
+  const size_t body_at = ply.find("end_header\n");
+  ASSERT_NE(count_at, std::string::npos);
+  ASSERT_NE(body_at, std::string::npos);
+  const long long count = std::atoll(ply.c_str() + count_at + 15);
+  EXPECT_EQ(static_cast<long long>(ply.size() - body_at - 11), count * 15);
+}
+
+}  // namespace
+}  // namespace rgbdtam
