@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "json_line.hpp"
+#include "memory_budget.hpp"
 #include "rgbdtam/hal/clock.hpp"
 #include "rgbdtam/runtime/pose_link.hpp"
 
@@ -28,6 +29,9 @@ Status ReplayJob::init(const ReplayOptions& options) {
     std::fprintf(stderr, "warning: %d unreadable lines in depth.txt, skipped; first: %s\n",
                  source_.depth_list().bad_lines, source_.depth_list().first_problem.message());
   }
+  const size_t per_frame = sizeof(StampedPose) + sizeof(Eigen::Matrix<double, 6, 6>);
+  RGBDTAM_RETURN_IF_ERROR(check_memory_budget(p, per_frame, source_.frame_count(), memory_budget(0),
+                                              &memory_needed_bytes_));
   RGBDTAM_RETURN_IF_ERROR(system_.init(p, monotonic_ns, options.map_sink));
   RGBDTAM_RETURN_IF_ERROR(system_.start());
   if (options.trajectory_path != nullptr) {
@@ -114,6 +118,8 @@ void ReplayJob::print_summary() const {
         system_.mapper().time_per_keyframe().percentile_ms(0.5),
         system_.mapper().time_per_keyframe().percentile_ms(0.95));
   }
+  std::printf("memory: %.0f MB allocated at init (half of this machine's memory is the budget)\n",
+              static_cast<double>(memory_needed_bytes_) / (1 << 20));
   std::printf("tracking ms/frame: median %.2f, p95 %.2f, max %.2f\n",
               tracking_ms_.percentile_ms(0.5), tracking_ms_.percentile_ms(0.95),
               tracking_ms_.max_ms());

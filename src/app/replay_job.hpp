@@ -58,6 +58,7 @@ class ReplayJob {
   int reported_problems_ = 0;
   std::atomic<bool> stop_requested_{false};
   Status write_failure_;
+  uint64_t memory_needed_bytes_ = 0;
   int64_t started_ns_ = 0, finished_ns_ = 0;
 };
 

@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <cstring>
 
+#include "memory_budget.hpp"
 #include "rgbdtam/hal/clock.hpp"
 #include "rgbdtam/hal/file.hpp"
 #include "rgbdtam/hal/serial_link.hpp"
@@ -132,6 +133,8 @@ RunJob::~RunJob() { finish(); }
 Status RunJob::init(const RunOptions& options) {
   options_ = options;
   RGBDTAM_RETURN_IF_ERROR(load_board_and_params(options, &board_, &params_));
+  RGBDTAM_RETURN_IF_ERROR(check_memory_budget(params_, 0, 0, memory_budget(board_.memory_budget_mb),
+                                              &memory_needed_bytes_));
   RGBDTAM_RETURN_IF_ERROR(open_board_sensor(board_, params_, &sensor_));
   if (std::strcmp(board_.link_kind, "udp") == 0) {
     char ip[64];
@@ -230,6 +233,9 @@ void RunJob::print_summary() const {
       "recovered, longest outage %.0f ms\n",
       r.stalls, r.usb_resets, r.usb_reset_failures, r.reopens, r.reopen_failures, r.recoveries,
       r.max_recovery_ns * 1e-6);
+  std::printf("memory: %.0f MB allocated at init for the SLAM system (budget: %s)\n",
+              static_cast<double>(memory_needed_bytes_) / (1 << 20),
+              memory_budget(board_.memory_budget_mb).from);
   std::printf("cadence: %u deadline misses (deadline %.1f ms after arrival)\n", c.deadline_misses,
               1e3 / board_.sensor_fps);
   std::printf("tracker task ms: median %.2f, p95 %.2f, max %.2f\n", t.percentile_ms(0.5),

@@ -83,6 +83,7 @@ class RunJob {
   std::atomic<bool> stop_requested_{false};
   int64_t started_ns_ = 0;
   int64_t last_progress_ns_ = 0;
+  uint64_t memory_needed_bytes_ = 0;
   int64_t wall_ns_ = 0;
   uint32_t recoveries_reported_ = 0;
   bool finished_ = false;

@@ -72,6 +72,17 @@ void KeyframeBuilder::allocate(const PinholeIntrinsics& finest, const TrackerOpt
   }
 }
 
+size_t KeyframeBuilder::keyframe_bytes(const PinholeIntrinsics& finest, const TrackerOptions& opt) {
+  size_t points = 0;
+  PinholeIntrinsics k = finest;
+  for (int l = 0; l < kPyramidLevels; ++l) {
+    points += 2 * static_cast<size_t>(points_capacity(opt, k, l, true)) +
+              static_cast<size_t>(points_capacity(opt, k, l, false));
+    k = k.half();
+  }
+  return points * sizeof(TrackPoint) + sizeof(Keyframe);
+}
+
 void KeyframeBuilder::allocate_keyframe(Keyframe* kf) const {
   PinholeIntrinsics k;
   k.width_px = edges_[0].width();

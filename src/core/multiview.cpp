@@ -35,6 +35,11 @@ float sample(const ImageF& img, const Eigen::Vector2f& p) {
 }
 }  // namespace
 
+size_t SeedMap::bytes_needed(const MultiViewOptions& opt) {
+  return static_cast<size_t>(opt.max_seeds) *
+         (sizeof(Seed) + static_cast<size_t>(opt.max_observations) * sizeof(Observation));
+}
+
 void SeedMap::allocate(const PinholeIntrinsics& k, const MultiViewOptions& opt) {
   opt_ = opt;
   k_ = k;

@@ -11,6 +11,7 @@
 namespace rgbdtam {
 namespace {
 constexpr size_t kMaxListBytes = 64u << 20;
+constexpr int kMaxListEntries = 1'000'000;
 
 const char* skip_blanks(const char* s) {
   while (*s == ' ' || *s == '\t' || *s == ',') ++s;
@@ -19,9 +20,21 @@ const char* skip_blanks(const char* s) {
 }  // namespace
 
 Status parse_tum_list(const char* text, const char* source, TumList* out) {
-  int lines = 1;
-  for (const char* c = text; *c != '\0'; ++c) lines += *c == '\n' || *c == '\r' ? 1 : 0;
-  out->entries.reset(new TumListEntry[static_cast<size_t>(lines)]);
+  // Entries for the lines that hold something: a file of blank lines asks for nothing.
+  int lines = 0;
+  for (const char* line = text; line != nullptr && *line != '\0';) {
+    size_t length = 0;
+    const char* next = split_line(line, &length);
+    const char* s = skip_blanks(line);
+    lines += s < line + length && *s != '#' ? 1 : 0;
+    line = next;
+  }
+  if (lines > kMaxListEntries) {
+    return Status::error(StatusCode::kOutOfRange,
+                         "%s: %d entries, more than the %d (over 9 hours at 30 Hz) a list may hold",
+                         source, lines, kMaxListEntries);
+  }
+  out->entries.reset(new TumListEntry[static_cast<size_t>(std::max(lines, 1))]);
   out->size = 0;
   out->bad_lines = 0;
   int line_no = 0;

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cstdlib>
 #include <initializer_list>
+#include <memory>
 #include <new>
 
 #include "fake_v4l2.hpp"
@@ -135,6 +136,35 @@ TEST(Allocations, CounterSeesAllocations) {
   delete static_cast<int*>(g_escape);
   g_armed = false;
   EXPECT_EQ(g_calls.load(), 2) << "the malloc/new counters are not wired in";
+}
+
+TEST(Allocations, InitAllocatesWhatTheMemoryBudgetIsToldItNeeds) {
+  // memory_need() refuses configurations the machine cannot hold before init allocates them;
+  // it must agree with what init really allocates, for every key that sizes it.
+  Params base;
+  char* text = nullptr;
+  const std::string config = testing::source_path("config/tum_fr1.conf");
+  ASSERT_TRUE(read_text_file(config.c_str(), 1 << 20, &text).is_ok());
+  ASSERT_TRUE(parse_params(text, config.c_str(), &base).is_ok());
+  delete[] text;
+  for (const char* change : {"", "map.keyframe_pool=96", "map.seeds=30000", "map.queue_frames=12",
+                             "map.enabled=false", "tracker.photometric_points=20000"}) {
+    Params p = base;
+    if (*change != '\0') {
+      ASSERT_TRUE(set_param(change, "test", &p).is_ok());
+    }
+    auto system = std::make_unique<SlamSystem>();
+    g_bytes = 0;
+    g_armed = true;
+    ASSERT_TRUE(system->init(p, nullptr, nullptr).is_ok());
+    g_armed = false;
+    const double allocated = static_cast<double>(g_bytes.load());
+    const double needed = static_cast<double>(memory_need(p).total());
+    std::printf("%-32s init allocated %7.1f MB, memory_need %7.1f MB\n",
+                *change != '\0' ? change : "(tum_fr1.conf)", allocated / 1e6, needed / 1e6);
+    EXPECT_GE(needed, allocated * 0.98) << change;
+    EXPECT_LE(needed, allocated * 1.15) << change;
+  }
 }
 
 TEST(Allocations, NoneWhileTrackingTheClipAfterInit) {

@@ -70,6 +70,14 @@ TEST(TumList, SkipsCommentsAndCountsBadLines) {
   EXPECT_NE(std::string(list.first_problem.message()).find("2.000000 listed again (c.png)"),
             std::string::npos)
       << list.first_problem.message();
+  // Memory follows the entries, not the lines; a list too long for any recording is refused.
+  EXPECT_FALSE(parse_tum_list(std::string(4'000'000, '\n').c_str(), "blank.txt", &list).is_ok());
+  std::string huge;
+  for (int i = 0; i <= 1'000'000; ++i) huge += "1 a\n";
+  const Status s = parse_tum_list(huge.c_str(), "huge.txt", &list);
+  ASSERT_FALSE(s.is_ok());
+  EXPECT_NE(std::string(s.message()).find("1000001 entries, more than"), std::string::npos)
+      << s.message();
 }
 
 TEST(PngDecoder, ColourBecomesBt601GreyAndBadFilesAreErrors) {

@@ -49,6 +49,8 @@ struct FusedPixel {
 class SeedMap {
  public:
   void allocate(const PinholeIntrinsics& k, const MultiViewOptions& opt);
+  // What allocate reserves, in bytes.
+  static size_t bytes_needed(const MultiViewOptions& opt);
   // Starts mapping a keyframe: its undistorted grey image and sensor inverse depth (0 = none)
   // at level 0, its Canny edges, and its pose. The images must outlive the mapping. Seeds are
   // searched up to max_inverse_depth (1/m): half the depth of the nearest thing the keyframe

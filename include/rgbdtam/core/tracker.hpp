@@ -83,6 +83,8 @@ struct Keyframe {
 // Selects a keyframe's residual points; owns its scratch images.
 class KeyframeBuilder {
  public:
+  // What allocate_keyframe reserves for one keyframe, in bytes, before allocating it.
+  static size_t keyframe_bytes(const PinholeIntrinsics& finest, const TrackerOptions& opt);
   void allocate(const PinholeIntrinsics& finest, const TrackerOptions& opt);
   void allocate_keyframe(Keyframe* kf) const;
   // photometric_depth, when given, replaces the frame's sensor depth for the photometric points

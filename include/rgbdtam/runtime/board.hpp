@@ -18,6 +18,7 @@ struct Board {
   char cpu[kTextBytes] = "";     // -mcpu for its preset, e.g. cortex-a72
   char preset[kTextBytes] = "";  // the CMake preset that builds for it
   int cpu_count = 1;             // cores the thread placement may name
+  int memory_budget_mb = 0;      // what init may allocate; 0: half of the machine's memory
 
   char sensor_kind[kTextBytes] = "";             // replay | openni2 | freenect | v4l2
   char sensor_device[kTextBytes] = "";           // replay: a TUM folder; else a device path or URI

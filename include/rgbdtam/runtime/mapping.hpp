@@ -62,6 +62,7 @@ struct MappingCounters {
 
 class MappingModule {
  public:
+  static constexpr int kOpenKeyframes = 3;  // params.cpp sizes the keyframe pool for this
   Status init(const Params& params, const PinholeIntrinsics& k, ClockFn clock, MapSink* sink);
   void step(const MapperFrame& frame);
   // Finishes the keyframe in progress (end of stream).
@@ -84,7 +85,6 @@ class MappingModule {
     uint64_t started = 0;  // arrival order
     int64_t spent_ns = 0;
   };
-  static constexpr int kOpenKeyframes = 3;  // params.cpp sizes the keyframe pool for this
   // Spaced frames from before the newest keyframe: a new keyframe is first matched against
   // them (as the authors' code reuses the previous keyframe's frames), so that the pixels the
   // camera is about to leave behind are seen from the other side too.
