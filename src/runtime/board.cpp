@@ -143,7 +143,21 @@ Status parse_board(const char* text, const char* source, const char* board_dir, 
 }
 
 Status set_board_value(const char* assignment, Board* out) {
-  return apply_key_value(assignment, "--board-set", kTable, out);
+  RGBDTAM_RETURN_IF_ERROR(apply_key_value(assignment, "--board-set", kTable, out));
+  // A path means what it means in the board file: relative to the board folder.
+  const char* key = assignment;
+  while (*key == ' ' || *key == '\t') ++key;
+  auto is = [&](const char* name) {
+    const size_t n = std::strlen(name);
+    return std::strncmp(key, name, n) == 0 && (key[n] == '=' || key[n] == ' ' || key[n] == '\t');
+  };
+  const bool replay = std::strcmp(out->sensor_kind, "replay") == 0;
+  if ((is("sensor.config") && !resolve(out->sensor_config, out->directory)) ||
+      (is("sensor.device") && replay && !resolve(out->sensor_device, out->directory))) {
+    return Status::error(StatusCode::kInvalidArgument, "--board-set %s: resolved path too long",
+                         assignment);
+  }
+  return Status::ok();
 }
 
 bool split_endpoint(const char* endpoint, char* ip, int ip_size, uint16_t* port) {

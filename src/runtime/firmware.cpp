@@ -49,8 +49,8 @@ PoseEstimate FirmwareRuntime::on_frame(const SensorFrame& frame, int64_t arrival
   // Events on transitions only, so that a long loss is one message, not one per frame.
   if ((pose.flags & kLost) != 0 && !lost_) {
     lost_ = true;
-    // The checks the pose failed tell the operator why (STATUSTEXT holds 50 characters).
-    char reasons[64], text[80];
+    // The checks the pose failed tell the operator why.
+    char reasons[160], text[mavlink::kMaxStatusTextChars + 1];
     describe_health(pose.failed_checks, reasons, sizeof(reasons));
     std::snprintf(text, sizeof(text), "rgbdtam: lost: %s", reasons);
     post_event(mavlink::kMavSeverityWarning, text);
@@ -82,18 +82,14 @@ PoseEstimate FirmwareRuntime::on_frame(const SensorFrame& frame, int64_t arrival
 void FirmwareRuntime::on_sensor_error(const Status& error, int64_t now_ns) {
   ++counters_.sensor_errors;
   fault_until_ns_ = now_ns + 2'000'000'000;
-  // STATUSTEXT holds 50 characters: the start of the message, which names the problem.
-  constexpr char kPrefix[] = "sensor: ";
-  char text[51] = {};
-  std::memcpy(text, kPrefix, sizeof(kPrefix) - 1);
-  const size_t room = sizeof(text) - sizeof(kPrefix);
-  std::memcpy(text + sizeof(kPrefix) - 1, error.message(), strnlen(error.message(), room));
+  char text[mavlink::kMaxStatusTextChars + 1];
+  std::snprintf(text, sizeof(text), "sensor: %s", error.message());
   post_event(mavlink::kMavSeverityError, text);
 }
 
 void FirmwareRuntime::on_sensor_recovered(int64_t outage_ns) {
   ++counters_.sensor_recoveries;
-  char text[51];
+  char text[mavlink::kMaxStatusTextChars + 1];
   std::snprintf(text, sizeof(text), "sensor: frames again after %lld ms",
                 static_cast<long long>(outage_ns / 1'000'000));
   post_event(mavlink::kMavSeverityInfo, text);

@@ -1,5 +1,6 @@
 #include "rgbdtam/runtime/mavlink.hpp"
 
+#include <algorithm>
 #include <cstring>
 
 namespace rgbdtam::mavlink {
@@ -124,6 +125,16 @@ int pack(const StatusText& m, uint8_t* payload) {
   Writer w(payload);
   status_text_fields(m, [&](const auto& v) { w.put(v); });
   return w.size();
+}
+
+const char* StatusTextJoiner::add(const StatusText& m) {
+  if (m.id == 0 || m.chunk_seq == 0) used_ = 0;
+  const size_t chars = std::min(strnlen(m.text, sizeof(m.text)), sizeof(text_) - 1 - used_);
+  std::memcpy(text_ + used_, m.text, chars);
+  used_ += chars;
+  text_[used_] = '\0';
+  const bool more = m.id != 0 && chars == sizeof(m.text);  // the last chunk holds a NUL
+  return more ? nullptr : text_;
 }
 
 int pack(const Odometry& m, uint8_t* payload) {

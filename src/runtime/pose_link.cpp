@@ -120,11 +120,25 @@ void PoseLink::on_pose(const PoseEstimate& pose, int64_t now_ns) {
 void PoseLink::on_status(uint8_t severity, const char* text, int64_t now_ns) {
   mavlink::StatusText s;
   s.severity = severity;
-  std::memcpy(s.text, text, strnlen(text, sizeof(s.text)));  // NUL only when shorter
-  uint8_t frame[mavlink::kMaxFrameBytes];
-  const int n = encoder_.encode(s, frame);
-  (void)spend(n, now_ns, true);
-  if (link_->send(frame, static_cast<size_t>(n))) ++counters_.status_texts_sent;
+  constexpr size_t kChunk = sizeof(s.text);
+  const size_t length = strnlen(text, mavlink::kMaxStatusTextChars);
+  // A longer text goes in chunks sharing a non-zero id; the last one ends in a NUL (an empty
+  // chunk when the text fills the one before), which tells the receiver it is complete.
+  if (length > kChunk) {
+    next_text_id_ = static_cast<uint16_t>(next_text_id_ == UINT16_MAX ? 1 : next_text_id_ + 1);
+    s.id = next_text_id_;
+  }
+  for (size_t at = 0;; at += kChunk) {
+    std::memset(s.text, 0, kChunk);
+    const size_t n_chars = std::min(kChunk, length - std::min(length, at));
+    std::memcpy(s.text, text + at, n_chars);
+    uint8_t frame[mavlink::kMaxFrameBytes];
+    const int n = encoder_.encode(s, frame);
+    (void)spend(n, now_ns, true);
+    if (link_->send(frame, static_cast<size_t>(n))) ++counters_.status_texts_sent;
+    if (n_chars < kChunk || s.id == 0) break;
+    ++s.chunk_seq;
+  }
 }
 
 void PoseLink::tick(int64_t now_ns, uint8_t system_status) {

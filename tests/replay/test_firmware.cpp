@@ -35,6 +35,7 @@ struct Monitor {
   std::vector<StampedPose> poses;
   int odometry = 0, lost = 0, heartbeats = 0;
   std::vector<std::string> texts;
+  mavlink::StatusTextJoiner joiner;
   void drain(const SE3& T_b_c) {
     uint8_t buf[2048];
     for (size_t n; (n = udp.receive(buf, sizeof(buf))) > 0;) {
@@ -53,7 +54,7 @@ struct Monitor {
         } else if (f.message_id == mavlink::kStatusText.id) {
           mavlink::StatusText t;
           mavlink::unpack(f.payload, f.length, &t);
-          texts.emplace_back(t.text, strnlen(t.text, sizeof(t.text)));
+          if (const char* whole = joiner.add(t)) texts.emplace_back(whole);
         }
       });
     }
@@ -278,11 +279,12 @@ TEST(Firmware, TrackingLostAndRegainedAreReportedOnceEach) {
   std::vector<std::string> texts;
   int odometry = 0, lost = 0;
   mavlink::Decoder decoder;
+  mavlink::StatusTextJoiner joiner;
   decoder.feed_all(link.bytes().data(), link.bytes().size(), [&](const mavlink::Frame& f) {
     if (f.message_id == mavlink::kStatusText.id) {
       mavlink::StatusText t;
       mavlink::unpack(f.payload, f.length, &t);
-      texts.emplace_back(t.text, strnlen(t.text, sizeof(t.text)));
+      if (const char* whole = joiner.add(t)) texts.emplace_back(whole);  // chunks joined
     } else if (f.message_id == mavlink::kOdometry.id) {
       mavlink::Odometry o;
       mavlink::unpack(f.payload, f.length, &o);

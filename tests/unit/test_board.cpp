@@ -50,6 +50,13 @@ TEST(Board, HostEmulationPathsAreRelativeToTheBoardFolder) {
   delete[] text;
   ASSERT_TRUE(set_board_value("sensor.device=/elsewhere", &b).is_ok());
   EXPECT_STREQ(b.sensor_device, "/elsewhere");
+  // An override's relative path means what it would in the board file.
+  ASSERT_TRUE(set_board_value("sensor.device=../../data/tum_fr1_xyz_clip", &b).is_ok());
+  EXPECT_EQ(std::string(b.sensor_device),
+            testing::source_path("board/host-emulation") + "/../../data/tum_fr1_xyz_clip");
+  ASSERT_TRUE(set_board_value("sensor.config = ../../config/tum_fr3.conf", &b).is_ok());
+  EXPECT_EQ(std::string(b.sensor_config),
+            testing::source_path("board/host-emulation") + "/../../config/tum_fr3.conf");
 }
 
 void expect_error(const std::string& text, const std::string& must_contain) {

@@ -9,6 +9,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <string>
 #include <vector>
 
 #include "rgbdtam/hal/serial_link.hpp"
@@ -87,6 +88,7 @@ struct Received {
   mavlink::Decoder decoder;
   std::vector<mavlink::Odometry> odometry;
   int heartbeats = 0, status_texts = 0;
+  std::vector<mavlink::StatusText> texts;
   void take(const uint8_t* bytes, size_t n) {
     decoder.feed_all(bytes, n, [this](const mavlink::Frame& f) {
       if (f.message_id == mavlink::kOdometry.id) {
@@ -96,6 +98,8 @@ struct Received {
         ++heartbeats;
       } else if (f.message_id == mavlink::kStatusText.id) {
         ++status_texts;
+        texts.emplace_back();
+        mavlink::unpack(f.payload, f.length, &texts.back());
       }
     });
   }
@@ -128,6 +132,44 @@ TEST(PoseLink, EveryOdometryArrivesOverUdpOnLoopback) {
             static_cast<uint64_t>((1000000000 + 150 * kFrameNs) / 1000));
   EXPECT_EQ(link.counters().odometry_sent, static_cast<uint64_t>(kPoses));
   EXPECT_EQ(sender.counters().drops + sender.counters().errors, 0u);
+}
+
+// A transport that decodes what it is given.
+class DecodingLink : public ByteLink {
+ public:
+  bool send(const uint8_t* bytes, size_t n) override {
+    rx.take(bytes, n);
+    return true;
+  }
+  size_t receive(uint8_t*, size_t) override { return 0; }
+  Received rx;
+};
+
+TEST(PoseLink, ALongStatusTextGoesInChunksThatJoinBackIntoIt) {
+  DecodingLink wire;
+  PoseLink link;
+  link.init(PoseLinkConfig{}, &wire);
+  const std::string reason =
+      "sensor: /dev/video0: VIDIOC_DQBUF: No such device (unplugged?); reopen failed: "
+      "/dev/video0: No such file or directory";  // 120 characters
+  link.on_status(mavlink::kMavSeverityError, reason.c_str(), 0);
+  link.on_status(mavlink::kMavSeverityInfo, "short", 0);
+  link.on_status(mavlink::kMavSeverityInfo, std::string(100, 'x').c_str(), 0);
+  const std::vector<mavlink::StatusText>& t = wire.rx.texts;
+  ASSERT_EQ(t.size(), 3u + 1u + 3u);
+  std::string joined;
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(t[i].id, t[0].id);
+    EXPECT_EQ(t[i].chunk_seq, i);
+    joined.append(t[i].text, strnlen(t[i].text, sizeof(t[i].text)));
+  }
+  EXPECT_NE(t[0].id, 0);
+  EXPECT_EQ(joined, reason);
+  EXPECT_EQ(t[3].id, 0) << "a text that fits is not chunked";
+  EXPECT_STREQ(t[3].text, "short");
+  EXPECT_NE(t[4].id, t[0].id);
+  EXPECT_EQ(t[6].chunk_seq, 2);
+  EXPECT_EQ(t[6].text[0], '\0') << "an empty last chunk ends a text that fills its chunks";
 }
 
 // A pseudo-terminal pair: the link writes the slave as it would a UART; the test reads the

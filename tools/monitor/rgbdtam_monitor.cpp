@@ -4,6 +4,7 @@
 //
 //   rgbdtam-monitor [--port 14550] [--board board/<name>] [--save trajectory.txt]
 //                   [--idle-exit seconds] [--quiet]
+#include <algorithm>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -26,7 +27,7 @@ struct Stats {
   uint64_t odometry = 0, valid = 0, lost = 0, heartbeats = 0, status_texts = 0;
   mavlink::Odometry last;
   uint8_t system_status = 0;
-  char last_text[51] = "";
+  char last_text[mavlink::kMaxStatusTextChars + 1] = "";
   int64_t window_start_ns = 0;
   uint64_t window_count = 0;
   double rate_hz = 0;
@@ -85,6 +86,7 @@ int monitor(int argc, char** argv) {
   std::signal(SIGTERM, on_signal);
   if (!quiet) std::fprintf(stderr, "listening on UDP port %u\n", port);
   mavlink::Decoder decoder;
+  mavlink::StatusTextJoiner joiner;
   Stats st;
   uint8_t buf[2048];
   int64_t last_rx_ns = 0, last_print_ns = 0;
@@ -122,7 +124,9 @@ int monitor(int argc, char** argv) {
       } else if (f.message_id == mavlink::kStatusText.id) {
         mavlink::StatusText t;
         mavlink::unpack(f.payload, f.length, &t);
-        std::memcpy(st.last_text, t.text, sizeof(t.text));
+        const char* whole = joiner.add(t);
+        if (whole == nullptr) return;  // more chunks to come
+        std::snprintf(st.last_text, sizeof(st.last_text), "%s", whole);
         ++st.status_texts;
         if (!quiet) {
           std::fprintf(stderr, "\nSTATUSTEXT (severity %u): %s\n", t.severity, st.last_text);

@@ -56,7 +56,8 @@ struct Board {
 // Parses a board file's text (source names it in errors) and resolves its relative paths
 // against board_dir (the folder the file is in).
 Status parse_board(const char* text, const char* source, const char* board_dir, Board* out);
-// One `key=value` override, e.g. from the command line (paths relative to the caller).
+// One `key=value` override, e.g. from the command line; a relative path is relative to the
+// board folder, as in the board file.
 Status set_board_value(const char* assignment, Board* out);
 // Consistency checks beyond each key's own range (names the board and the key).
 Status validate_board(const Board& b);

@@ -20,7 +20,7 @@ struct LinkMessage {
   Kind kind = Kind::kPose;
   PoseEstimate pose;
   uint8_t severity = 0;
-  char text[51] = {};
+  char text[mavlink::kMaxStatusTextChars + 1] = {};  // sent in 50-character STATUSTEXT chunks
 };
 
 using ClockFn = int64_t (*)();

@@ -63,6 +63,10 @@ struct Heartbeat {
   uint8_t mavlink_version = 3;
 };
 
+// The longest status text sent: a prefix and a whole error message (Status holds 255), in
+// 50-character STATUSTEXT chunks that MAVLink 2 joins by `id` and `chunk_seq`.
+constexpr int kMaxStatusTextChars = 300;
+
 struct StatusText {
   uint8_t severity = kMavSeverityInfo;
   char text[50] = {};  // not NUL-terminated when all 50 are used
@@ -88,6 +92,18 @@ struct Odometry {
 // Payload (wire order) of each message; returns the full, untruncated length.
 int pack(const Heartbeat& m, uint8_t* payload);
 int pack(const StatusText& m, uint8_t* payload);
+
+// Joins STATUSTEXT chunks back into whole texts, as a ground station does.
+class StatusTextJoiner {
+ public:
+  // The whole text when m completes one (a text that fits one message completes at once),
+  // else nullptr while more chunks are due.
+  const char* add(const StatusText& m);
+
+ private:
+  char text_[kMaxStatusTextChars + 1] = {};
+  size_t used_ = 0;
+};
 int pack(const Odometry& m, uint8_t* payload);
 // From a received payload (length as received; truncated zeros are restored).
 void unpack(const uint8_t* payload, int length, Heartbeat* m);

@@ -67,6 +67,7 @@ class PoseLink {
   PoseLinkConfig config_;
   ByteLink* link_ = nullptr;
   mavlink::Encoder encoder_{1, 197};
+  uint16_t next_text_id_ = 0;  // of a chunked text; 0 means "not chunked"
   int64_t last_heartbeat_ns_ = -1;
   double tokens_ = 0;
   int64_t tokens_at_ns_ = -1;

@@ -12,7 +12,7 @@ namespace rgbdtam {
 // What SlamSystem::init allocates for a configuration, by the keys that size it, so that a
 // configuration the machine cannot hold is refused with their names instead of aborting.
 struct MemoryNeed {
-  size_t per_keyframe = 0;  // points, map points and the slot
+  size_t per_keyframe = 0;   // points, map points and the slot
   size_t keyframe_pool = 0;  // map.keyframe_pool of them
   size_t mapper = 0;         // map.queue_frames frames, map.seeds seeds and their maps
   size_t images = 0;         // pyramids and scratch images, from camera.width x camera.height
