@@ -1,18 +1,64 @@
 #!/usr/bin/env bash
-# Fuzzes the MAVLink decoder with libFuzzer (Debian's clang) for N seconds (default 60),
-# starting from a corpus of valid frames, and prints libFuzzer's summary (executions count).
-#   tools/fuzz.sh [seconds]
+# Fuzzes every parser with libFuzzer (Debian's clang) under AddressSanitizer and UBSan, N
+# seconds each (default 60), from seed corpora, and prints each target's executions:
+#   mavlink_decoder  the MAVLink decoder the link runs (arbitrary bytes in arbitrary chunks)
+#   png_decoder      PNG decoding through our arena, as grey and as depth (libpng and zlib are
+#                    Debian's uninstrumented builds: guidance covers our code, ASan all of it)
+#   text_formats     TUM lists, configs, boards, --set/--board-set values, trajectories
+#   tools/fuzz.sh [seconds] [target...]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-60}
+shift || true
+targets=("$@")
+[ ${#targets[@]} -gt 0 ] || targets=(mavlink_decoder png_decoder text_formats)
 command -v clang++ >/dev/null || tools/setup.sh --fuzz
 out=build/fuzz
-mkdir -p "$out/corpus"
-clang++ -std=c++17 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all \
-  -Iinclude src/runtime/mavlink.cpp tests/fuzz/fuzz_mavlink_decoder.cpp -o "$out/fuzz_mavlink_decoder"
-# Seeds: one frame of each message, so that the fuzzer starts past the checksum.
-clang++ -std=c++17 -Iinclude src/runtime/mavlink.cpp tests/fuzz/make_seeds.cpp -o "$out/make_seeds"
-"$out/make_seeds" "$out/corpus"
-"$out/fuzz_mavlink_decoder" "$out/corpus" -max_total_time="$seconds" -print_final_stats=1 \
-  -rss_limit_mb=1024 2>&1 | grep -E "^(Done|stat::number_of_executed_units|stat::peak_rss_mb|==|SUMMARY)|ERROR|crash" || true
-test "${PIPESTATUS[0]}" -eq 0
+mkdir -p "$out"
+flags=(-std=c++17 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all -Iinclude
+       -isystem /usr/include/eigen3)
+
+build() {  # name, sources... (compiled in parallel, then linked)
+  local name=$1 objects=()
+  shift
+  mkdir -p "$out/obj_$name"
+  for src in "$@"; do objects+=("$out/obj_$name/$(echo "$src" | tr / _).o"); done
+  printf '%s\n' "$@" | xargs -P "$(nproc)" -I{} sh -c \
+    'clang++ "$@" -c {} -o "'"$out/obj_$name"'/$(echo {} | tr / _).o"' _ "${flags[@]}"
+  clang++ "${flags[@]}" "${objects[@]}" -lpng -lz -o "$out/fuzz_$name"
+}
+
+seed_mavlink_decoder() {
+  clang++ -std=c++17 -Iinclude src/runtime/mavlink.cpp tests/fuzz/make_seeds.cpp -o "$out/make_seeds"
+  "$out/make_seeds" "$1"
+}
+seed_png_decoder() { cp tests/fuzz/seeds/png/* "$1"/; }
+seed_text_formats() {  # the first byte chooses the format (fuzz_text_formats.cpp)
+  local n=0
+  for entry in 0:data/tum_fr1_xyz_clip/rgb.txt 0:data/tum_fr1_xyz_clip/depth.txt \
+      1:config/tum_fr1.conf 1:config/kinect_v1.conf 2:board/host-emulation/board.conf \
+      2:board/raspberry-pi-4/board.conf 3:data/tum_fr1_xyz_clip/groundtruth.txt; do
+    { printf "\\x0${entry%%:*}"; head -c 4000 "${entry#*:}"; } >"$1/seed$((n++))"
+  done
+  printf '\x04tracker.robust_c=3' >"$1/seed$n"
+}
+
+for t in "${targets[@]}"; do
+  case $t in
+    mavlink_decoder) build "$t" src/runtime/mavlink.cpp tests/fuzz/fuzz_mavlink_decoder.cpp ;;
+    png_decoder) build "$t" src/hal/png_decoder.cpp tests/fuzz/fuzz_png_decoder.cpp ;;
+    text_formats)
+      build "$t" src/core/*.cpp src/hal/tum_replay_source.cpp src/hal/tum_trajectory.cpp \
+        src/hal/tum_timestamp.cpp src/hal/file.cpp src/hal/clock.cpp src/hal/png_decoder.cpp \
+        src/runtime/board.cpp src/runtime/params.cpp src/runtime/key_value.cpp \
+        tests/fuzz/fuzz_text_formats.cpp ;;
+    *) echo "unknown fuzz target $t" >&2; exit 2 ;;
+  esac
+  corpus="$out/corpus_$t"
+  mkdir -p "$corpus"
+  "seed_$t" "$corpus"
+  echo "--- $t ($seconds s)"
+  "$out/fuzz_$t" "$corpus" -max_total_time="$seconds" -print_final_stats=1 -rss_limit_mb=2048 \
+    -max_len=8192 2>&1 | grep -E "^(Done|stat::number_of_executed_units|==|SUMMARY)|ERROR|crash" || true
+  test "${PIPESTATUS[0]}" -eq 0
+done

@@ -2,8 +2,8 @@
 # The test command: host release build with every test (the full fr1_xyz test runs where the
 # sequence exists), host debug build under ASan+UBSan, the dynamic build with the shared-library
 # sensor backends, and the static aarch64 build with its
-# tests under qemu-user, a build for each board's CPU, and a short fuzzing run of the MAVLink
-# decoder. The slow full-sequence test is left to the release build.
+# tests under qemu-user, a build for each board's CPU, and a short fuzzing run of every parser.
+# The slow full-sequence test is left to the release build.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 tools/setup.sh --aarch64 --fuzz
@@ -38,7 +38,7 @@ for board in raspberry-pi-4 radxa-rock-5b; do
   cmake --preset "aarch64-$board" >/dev/null
   cmake --build --preset "aarch64-$board" -j"$jobs" --target rgbdtam_core >/dev/null
 done
-echo "=== fuzz: MAVLink decoder ($(date +%T))"
+echo "=== fuzz: every parser, briefly ($(date +%T))"
 tools/fuzz.sh 10
 echo "=== static binaries"
 file build/bin/rgbdtam build/aarch64/bin/rgbdtam

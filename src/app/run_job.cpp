@@ -214,6 +214,42 @@ void RunJob::finish() {
   if (options_.progress) std::fprintf(stderr, "\n");
 }
 
+namespace {
+const char* autopilot_name(uint8_t autopilot) {
+  switch (autopilot) {
+    case 3:
+      return "ArduPilot";
+    case 12:
+      return "PX4";
+    case 8:
+      return "not an autopilot";
+    default:
+      return "other";
+  }
+}
+
+void print_peer(const PeerState& p) {
+  if (!p.heard) {
+    std::printf("autopilot: none heard (%llu frames received)\n",
+                static_cast<unsigned long long>(p.frames));
+    return;
+  }
+  std::printf(
+      "autopilot: system %u component %u, MAV_AUTOPILOT %u (%s), MAV_TYPE %u; %u "
+      "heartbeats, silent %u times%s\n",
+      p.system_id, p.component_id, p.autopilot, autopilot_name(p.autopilot), p.type, p.heartbeats,
+      p.silences, p.silent ? " (silent at the end)" : "");
+  std::printf("timesync: %u of its requests answered; %u answers to ours", p.timesync_answered,
+              p.timesync_replies);
+  if (p.timesync_replies > 0) {
+    std::printf(", its clock %+.3f ms from our time_usec, best round trip %.3f ms",
+                static_cast<double>(p.clock_offset_ns) * 1e-6,
+                static_cast<double>(p.best_round_trip_ns) * 1e-6);
+  }
+  std::printf("\n");
+}
+}  // namespace
+
 void RunJob::print_summary() const {
   const FirmwareCounters& c = runtime_->counters();
   const LatencyStats& t = runtime_->tracker_time();
@@ -268,6 +304,7 @@ void RunJob::print_summary() const {
                 static_cast<unsigned long long>(tc.errors),
                 static_cast<unsigned long long>(tc.lost_bytes), std::strerror(tc.last_error));
   }
+  print_peer(l.peer());
   std::printf("gpio: status LED %u transitions\n", runtime_->led().transitions());
 }
 

@@ -16,9 +16,7 @@ namespace {
 constexpr size_t kMaxTrajectoryBytes = 256u << 20;
 }
 
-Status read_tum_trajectory(const char* path, std::vector<StampedPose>* out, int* bad_lines) {
-  char* text = nullptr;
-  RGBDTAM_RETURN_IF_ERROR(read_text_file(path, kMaxTrajectoryBytes, &text));
+void parse_tum_trajectory(char* text, std::vector<StampedPose>* out, int* bad_lines) {
   out->clear();
   *bad_lines = 0;
   for (char* line = text; line != nullptr && *line != '\0';) {
@@ -29,7 +27,7 @@ Status read_tum_trajectory(const char* path, std::vector<StampedPose>* out, int*
       if (*c == ',' || *c == '\t') *c = ' ';
     const char* s = line;
     while (*s == ' ') ++s;
-    if (*s != '\0' && *s != '#' && *s != '\r') {
+    if (*s != '\0' && *s != '#') {
       double v[8];
       int n = 0;
       char* cur = const_cast<char*>(s);
@@ -39,19 +37,26 @@ Status read_tum_trajectory(const char* path, std::vector<StampedPose>* out, int*
         if (end == cur || !std::isfinite(v[n])) break;
         cur = end;
       }
-      const Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);
-      if (n < 8 || q.norm() < 1e-9) {
-        ++*bad_lines;  // evaluate_rpe.py skips zero quaternions as well
+      // evaluate_rpe.py skips zero quaternions as well.
+      if (n < 8 || Eigen::Quaterniond(v[7], v[4], v[5], v[6]).norm() < 1e-9) {
+        ++*bad_lines;
       } else {
-        out->push_back({v[0], SE3(q, Vector3d(v[1], v[2], v[3]))});
+        out->push_back(
+            {v[0], SE3(Eigen::Quaterniond(v[7], v[4], v[5], v[6]), Vector3d(v[1], v[2], v[3]))});
       }
     }
     line = next;
   }
-  delete[] text;
   std::stable_sort(out->begin(), out->end(), [](const StampedPose& a, const StampedPose& b) {
     return a.stamp_s < b.stamp_s;
   });
+}
+
+Status read_tum_trajectory(const char* path, std::vector<StampedPose>* out, int* bad_lines) {
+  char* text = nullptr;
+  RGBDTAM_RETURN_IF_ERROR(read_text_file(path, kMaxTrajectoryBytes, &text));
+  parse_tum_trajectory(text, out, bad_lines);
+  delete[] text;
   if (out->empty()) return Status::error(StatusCode::kCorrupt, "%s: no poses", path);
   return Status::ok();
 }

@@ -62,7 +62,7 @@ PoseEstimate FirmwareRuntime::on_frame(const SensorFrame& frame, int64_t arrival
     pool_full_reported_ = true;
     post_event(mavlink::kMavSeverityInfo, "rgbdtam: keyframe pool full, recycling oldest");
   }
-  (void)link_.post_pose(pose);
+  (void)link_.post_pose(pose, arrival_ns);
   const int64_t now = clock_();
   LedState state = valid                                 ? LedState::kTracking
                    : (pose.flags & kNotInitialised) != 0 ? LedState::kInitialising

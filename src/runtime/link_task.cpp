@@ -34,10 +34,11 @@ bool LinkTask::post(const LinkMessage& m) {
   return true;
 }
 
-bool LinkTask::post_pose(const PoseEstimate& pose) {
+bool LinkTask::post_pose(const PoseEstimate& pose, int64_t arrival_ns) {
   LinkMessage m;
   m.kind = LinkMessage::Kind::kPose;
   m.pose = pose;
+  m.arrival_ns = arrival_ns;
   return post(m);
 }
 
@@ -62,6 +63,7 @@ void LinkTask::run() {
     while (LinkMessage* m = queue_.front()) {
       const int64_t t0 = clock_();
       if (m->kind == LinkMessage::Kind::kPose) {
+        link_.set_time_base(m->pose.timestamp_ns, m->arrival_ns);
         link_.on_pose(m->pose, t0);
       } else {
         link_.on_status(m->severity, m->text, t0);

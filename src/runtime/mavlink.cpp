@@ -66,7 +66,8 @@ uint16_t crc_accumulate(const uint8_t* bytes, size_t n, uint16_t crc) {
 }
 
 const MessageSpec* find_spec(uint32_t id) {
-  static constexpr const MessageSpec* kKnown[] = {&kHeartbeat, &kStatusText, &kOdometry};
+  static constexpr const MessageSpec* kKnown[] = {&kHeartbeat, &kStatusText, &kOdometry,
+                                                  &kTimesync};
   for (const MessageSpec* s : kKnown) {
     if (s->id == id) return s;
   }
@@ -91,6 +92,14 @@ void status_text_fields(M& m, F&& f) {
   f(m.text);
   f(m.id);
   f(m.chunk_seq);
+}
+
+template <typename M, typename F>
+void timesync_fields(M& m, F&& f) {
+  f(m.tc1);
+  f(m.ts1);
+  f(m.target_system);
+  f(m.target_component);
 }
 
 template <typename M, typename F>
@@ -137,6 +146,12 @@ const char* StatusTextJoiner::add(const StatusText& m) {
   return more ? nullptr : text_;
 }
 
+int pack(const Timesync& m, uint8_t* payload) {
+  Writer w(payload);
+  timesync_fields(m, [&](const auto& v) { w.put(v); });
+  return w.size();
+}
+
 int pack(const Odometry& m, uint8_t* payload) {
   Writer w(payload);
   odometry_fields(m, [&](const auto& v) { w.put(v); });
@@ -153,6 +168,12 @@ void unpack(const uint8_t* payload, int length, StatusText* m) {
   uint8_t scratch[kMaxPayloadBytes];
   Reader r(padded(payload, length, kStatusText.payload_bytes, scratch));
   status_text_fields(*m, [&](auto& v) { r.get(&v); });
+}
+
+void unpack(const uint8_t* payload, int length, Timesync* m) {
+  uint8_t scratch[kMaxPayloadBytes];
+  Reader r(padded(payload, length, kTimesync.payload_bytes, scratch));
+  timesync_fields(*m, [&](auto& v) { r.get(&v); });
 }
 
 void unpack(const uint8_t* payload, int length, Odometry* m) {

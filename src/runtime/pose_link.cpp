@@ -141,7 +141,73 @@ void PoseLink::on_status(uint8_t severity, const char* text, int64_t now_ns) {
   }
 }
 
+template <typename Message>
+void PoseLink::send_now(const Message& m, int64_t now_ns) {
+  uint8_t frame[mavlink::kMaxFrameBytes];
+  const int n = encoder_.encode(m, frame);
+  (void)spend(n, now_ns, true);
+  (void)link_->send(frame, static_cast<size_t>(n));
+}
+
+void PoseLink::on_frame(const mavlink::Frame& f, int64_t now_ns) {
+  if (f.system_id == config_.system_id && f.component_id == config_.component_id) return;
+  ++peer_.frames;
+  if (f.message_id == mavlink::kHeartbeat.id) {
+    mavlink::Heartbeat hb;
+    mavlink::unpack(f.payload, f.length, &hb);
+    peer_.heard = true;
+    peer_.silent = false;
+    peer_.system_id = f.system_id;
+    peer_.component_id = f.component_id;
+    peer_.autopilot = hb.autopilot;
+    peer_.type = hb.type;
+    peer_.last_heartbeat_ns = now_ns;
+    ++peer_.heartbeats;
+  } else if (f.message_id == mavlink::kTimesync.id) {
+    mavlink::Timesync t;
+    mavlink::unpack(f.payload, f.length, &t);
+    const int64_t sensor_now = now_ns + sensor_minus_now_ns_;
+    if (t.tc1 == 0) {  // a request: answered in the clock of our time_usec
+      mavlink::Timesync answer;
+      answer.tc1 = sensor_now;
+      answer.ts1 = t.ts1;
+      answer.target_system = f.system_id;
+      answer.target_component = f.component_id;
+      send_now(answer, now_ns);
+      ++peer_.timesync_answered;
+    } else if (timesync_sent_ns_ >= 0 && t.ts1 == timesync_sent_ts1_) {  // our answer
+      const int64_t round_trip = now_ns - timesync_sent_ns_;
+      timesync_sent_ns_ = -1;
+      if (peer_.best_round_trip_ns < 0 || round_trip < peer_.best_round_trip_ns) {
+        peer_.best_round_trip_ns = round_trip;
+      }
+      if (round_trip > 2 * peer_.best_round_trip_ns) return;  // delayed: its offset is not
+      const int64_t offset = t.tc1 - (t.ts1 + round_trip / 2);
+      peer_.clock_offset_ns = peer_.timesync_replies == 0
+                                  ? offset
+                                  : peer_.clock_offset_ns + (offset - peer_.clock_offset_ns) / 5;
+      ++peer_.timesync_replies;
+    }
+  }
+}
+
+void PoseLink::listen(int64_t now_ns) {
+  // Bounded, so that a flood of bytes cannot keep the link from sending.
+  constexpr int kMaxReadsPerTick = 64;
+  uint8_t bytes[512];
+  for (int i = 0; i < kMaxReadsPerTick; ++i) {
+    const size_t n = link_->receive(bytes, sizeof(bytes));
+    if (n == 0) break;
+    decoder_.feed_all(bytes, n, [&](const mavlink::Frame& f) { on_frame(f, now_ns); });
+  }
+  if (peer_.heard && !peer_.silent && now_ns - peer_.last_heartbeat_ns > kPeerSilentNs) {
+    peer_.silent = true;
+    ++peer_.silences;
+  }
+}
+
 void PoseLink::tick(int64_t now_ns, uint8_t system_status) {
+  listen(now_ns);
   if (last_heartbeat_ns_ < 0 || now_ns - last_heartbeat_ns_ >= config_.heartbeat_period_ns) {
     last_heartbeat_ns_ = now_ns;
     mavlink::Heartbeat hb;
@@ -150,6 +216,16 @@ void PoseLink::tick(int64_t now_ns, uint8_t system_status) {
     const int n = encoder_.encode(hb, frame);
     (void)spend(n, now_ns, true);
     if (link_->send(frame, static_cast<size_t>(n))) ++counters_.heartbeats_sent;
+    // Our own TIMESYNC, once a second to a peer that is there, measures its clock.
+    if (peer_.heard && !peer_.silent) {
+      mavlink::Timesync request;
+      request.ts1 = now_ns + sensor_minus_now_ns_;
+      request.target_system = peer_.system_id;
+      request.target_component = peer_.component_id;
+      timesync_sent_ns_ = now_ns;
+      timesync_sent_ts1_ = request.ts1;
+      send_now(request, now_ns);
+    }
   }
   link_->flush();
 }

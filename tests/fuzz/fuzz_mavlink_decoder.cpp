@@ -17,6 +17,8 @@ void check_round_trip(const Frame& f) {
   Heartbeat hb;
   StatusText st;
   Odometry od;
+  Timesync ts;
+  if (spec == &kTimesync) unpack(f.payload, f.length, &ts);
   if (spec == &kHeartbeat) unpack(f.payload, f.length, &hb);
   if (spec == &kStatusText) unpack(f.payload, f.length, &st);
   if (spec == &kOdometry) unpack(f.payload, f.length, &od);

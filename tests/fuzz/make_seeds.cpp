@@ -28,5 +28,8 @@ int main(int argc, char** argv) {
   bool ok = write("heartbeat", enc.encode(Heartbeat{}, wire));
   ok = write("statustext", enc.encode(st, wire)) && ok;
   ok = write("odometry", enc.encode(od, wire)) && ok;
+  Timesync ts;
+  ts.ts1 = 123456789;
+  ok = write("timesync", enc.encode(ts, wire)) && ok;
   return ok ? 0 : 1;
 }

@@ -108,7 +108,9 @@ TEST(Mavlink, X25CheckValue) {
 TEST(Mavlink, CrcExtraAndLengthsMatchTheXmlDefinitions) {
   const std::string xml = read_file(testing::source_path("tests/data/mavlink/messages.xml"));
   ASSERT_FALSE(xml.empty());
-  for (const MessageSpec* s : {&kHeartbeat, &kStatusText, &kOdometry}) expect_spec_matches(xml, *s);
+  for (const MessageSpec* s : {&kHeartbeat, &kStatusText, &kOdometry, &kTimesync}) {
+    expect_spec_matches(xml, *s);
+  }
 }
 
 TEST(Mavlink, CrcExtraMatchesTheUpstreamFilesWhereThisMachineHasThem) {
@@ -119,6 +121,7 @@ TEST(Mavlink, CrcExtraMatchesTheUpstreamFilesWhereThisMachineHasThem) {
   expect_spec_matches(minimal, kHeartbeat);
   expect_spec_matches(common, kStatusText);
   expect_spec_matches(common, kOdometry);
+  expect_spec_matches(common, kTimesync);
 }
 
 Odometry sample_odometry(uint64_t t_us) {

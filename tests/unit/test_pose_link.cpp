@@ -6,6 +6,7 @@
 #include <pty.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -89,6 +90,7 @@ struct Received {
   std::vector<mavlink::Odometry> odometry;
   int heartbeats = 0, status_texts = 0;
   std::vector<mavlink::StatusText> texts;
+  std::vector<mavlink::Timesync> timesync;
   void take(const uint8_t* bytes, size_t n) {
     decoder.feed_all(bytes, n, [this](const mavlink::Frame& f) {
       if (f.message_id == mavlink::kOdometry.id) {
@@ -100,6 +102,9 @@ struct Received {
         ++status_texts;
         texts.emplace_back();
         mavlink::unpack(f.payload, f.length, &texts.back());
+      } else if (f.message_id == mavlink::kTimesync.id) {
+        timesync.emplace_back();
+        mavlink::unpack(f.payload, f.length, &timesync.back());
       }
     });
   }
@@ -170,6 +175,83 @@ TEST(PoseLink, ALongStatusTextGoesInChunksThatJoinBackIntoIt) {
   EXPECT_NE(t[4].id, t[0].id);
   EXPECT_EQ(t[6].chunk_seq, 2);
   EXPECT_EQ(t[6].text[0], '\0') << "an empty last chunk ends a text that fills its chunks";
+}
+
+// An autopilot at the other end: what the link sends is decoded, what the autopilot says is
+// received by the link.
+class AutopilotLink : public ByteLink {
+ public:
+  bool send(const uint8_t* bytes, size_t n) override {
+    sent.take(bytes, n);
+    return true;
+  }
+  size_t receive(uint8_t* bytes, size_t n) override {
+    const size_t k = std::min(n, inbox_.size());
+    std::copy(inbox_.begin(), inbox_.begin() + static_cast<long>(k), bytes);
+    inbox_.erase(inbox_.begin(), inbox_.begin() + static_cast<long>(k));
+    return k;
+  }
+  template <typename Message>
+  void says(const Message& m) {
+    uint8_t frame[mavlink::kMaxFrameBytes];
+    const int n = autopilot_.encode(m, frame);
+    inbox_.insert(inbox_.end(), frame, frame + n);
+  }
+  Received sent;
+
+ private:
+  mavlink::Encoder autopilot_{1, 1};  // PX4's system 1, autopilot component
+  std::vector<uint8_t> inbox_;
+};
+
+TEST(PoseLink, TheLinkListensHeartbeatAndTimesync) {
+  AutopilotLink wire;
+  PoseLink link;
+  link.init(PoseLinkConfig{}, &wire);
+  // The camera's clock (ODOMETRY time_usec) runs 100 s ahead of the link's.
+  constexpr int64_t kSensorAhead = 100'000'000'000;
+  link.set_time_base(1'000'000'000 + kSensorAhead, 1'000'000'000);
+  mavlink::Heartbeat px4;
+  px4.autopilot = 12;  // MAV_AUTOPILOT_PX4
+  px4.type = 2;        // quadrotor
+  wire.says(px4);
+  link.tick(2'000'000'000, mavlink::kMavStateActive);
+  const PeerState& peer = link.peer();
+  ASSERT_TRUE(peer.heard);
+  EXPECT_EQ(peer.autopilot, 12);
+  EXPECT_EQ(peer.system_id, 1);
+  // Its request is answered at once, in the clock of time_usec.
+  mavlink::Timesync request;
+  request.ts1 = 777;
+  wire.says(request);
+  link.tick(2'010'000'000, mavlink::kMavStateActive);
+  ASSERT_EQ(wire.sent.timesync.size(), 2u) << "our request, then our answer";
+  const mavlink::Timesync& ours = wire.sent.timesync[0];
+  const mavlink::Timesync& answer = wire.sent.timesync[1];
+  EXPECT_EQ(ours.tc1, 0);
+  EXPECT_EQ(ours.ts1, 2'000'000'000 + kSensorAhead);
+  EXPECT_EQ(answer.tc1, 2'010'000'000 + kSensorAhead);
+  EXPECT_EQ(answer.ts1, 777);
+  EXPECT_EQ(answer.target_system, 1);
+  EXPECT_EQ(peer.timesync_answered, 1u);
+  // Its answer to ours, 20 ms later, from a clock 2 s ahead of time_usec's.
+  mavlink::Timesync reply;
+  reply.ts1 = ours.ts1;
+  reply.tc1 = ours.ts1 + 10'000'000 + 2'000'000'000;
+  wire.says(reply);
+  link.tick(2'020'000'000, mavlink::kMavStateActive);
+  EXPECT_EQ(peer.timesync_replies, 1u);
+  EXPECT_EQ(peer.clock_offset_ns, 2'000'000'000);
+  EXPECT_EQ(peer.best_round_trip_ns, 20'000'000);
+  // Three seconds without a heartbeat: silent, once.
+  link.tick(5'500'000'000, mavlink::kMavStateActive);
+  link.tick(6'000'000'000, mavlink::kMavStateActive);
+  EXPECT_TRUE(peer.silent);
+  EXPECT_EQ(peer.silences, 1u);
+  wire.says(px4);
+  link.tick(6'100'000'000, mavlink::kMavStateActive);
+  EXPECT_FALSE(peer.silent);
+  EXPECT_EQ(peer.heartbeats, 2u);
 }
 
 // A pseudo-terminal pair: the link writes the slave as it would a UART; the test reads the

@@ -13,6 +13,8 @@ namespace rgbdtam {
 
 // Host-side reader for evaluation (allocates). Lines that do not parse are counted, not fatal.
 Status read_tum_trajectory(const char* path, std::vector<StampedPose>* out, int* bad_lines);
+// The same from text (written to while parsing), sorted by time.
+void parse_tum_trajectory(char* text, std::vector<StampedPose>* out, int* bad_lines);
 // Timestamps of an rgb.txt-style list, in seconds.
 Status read_tum_stamps(const char* path, std::vector<double>* out);
 

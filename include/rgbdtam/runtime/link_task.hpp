@@ -19,6 +19,7 @@ struct LinkMessage {
   enum class Kind : uint8_t { kPose, kStatus };
   Kind kind = Kind::kPose;
   PoseEstimate pose;
+  int64_t arrival_ns = 0;  // when the pose's frame arrived, on the link's clock
   uint8_t severity = 0;
   char text[mavlink::kMaxStatusTextChars + 1] = {};  // sent in 50-character STATUSTEXT chunks
 };
@@ -31,7 +32,7 @@ class LinkTask {
   void init(const PoseLinkConfig& config, ByteLink* link, int queue_slots, ClockFn clock);
   Status start(const ThreadPlacement& placement);
   // Tracker thread. False when the queue was full (the message is dropped and counted).
-  bool post_pose(const PoseEstimate& pose);
+  bool post_pose(const PoseEstimate& pose, int64_t arrival_ns);
   bool post_status(uint8_t severity, const char* text);
   // MAV_STATE for the heartbeat.
   void set_system_status(uint8_t state) { system_status_.store(state, std::memory_order_relaxed); }
@@ -41,6 +42,7 @@ class LinkTask {
   uint64_t queue_drops() const { return queue_drops_.load(std::memory_order_relaxed); }
   // Read after stop().
   const PoseLinkCounters& counters() const { return link_.counters(); }
+  const PeerState& peer() const { return link_.peer(); }
   const LatencyStats& time_per_message() const { return per_message_; }
 
  private:

@@ -36,6 +36,7 @@ struct MessageSpec {
 constexpr MessageSpec kHeartbeat{0, 9, 50, "HEARTBEAT"};
 constexpr MessageSpec kStatusText{253, 54, 83, "STATUSTEXT"};
 constexpr MessageSpec kOdometry{331, 233, 91, "ODOMETRY"};
+constexpr MessageSpec kTimesync{111, 18, 34, "TIMESYNC"};
 // The spec of a message id this link knows, or null.
 const MessageSpec* find_spec(uint32_t id);
 
@@ -74,6 +75,15 @@ struct StatusText {
   uint8_t chunk_seq = 0;
 };
 
+// A request has tc1 = 0 and ts1 = the sender's time; the answer has tc1 = the answerer's time
+// and the request's ts1. Times in ns.
+struct Timesync {
+  int64_t tc1 = 0;
+  int64_t ts1 = 0;
+  uint8_t target_system = 0;
+  uint8_t target_component = 0;
+};
+
 struct Odometry {
   uint64_t time_usec = 0;
   float x = 0, y = 0, z = 0;                          // m, in frame_id
@@ -92,6 +102,7 @@ struct Odometry {
 // Payload (wire order) of each message; returns the full, untruncated length.
 int pack(const Heartbeat& m, uint8_t* payload);
 int pack(const StatusText& m, uint8_t* payload);
+int pack(const Timesync& m, uint8_t* payload);
 
 // Joins STATUSTEXT chunks back into whole texts, as a ground station does.
 class StatusTextJoiner {
@@ -108,6 +119,7 @@ int pack(const Odometry& m, uint8_t* payload);
 // From a received payload (length as received; truncated zeros are restored).
 void unpack(const uint8_t* payload, int length, Heartbeat* m);
 void unpack(const uint8_t* payload, int length, StatusText* m);
+void unpack(const uint8_t* payload, int length, Timesync* m);
 void unpack(const uint8_t* payload, int length, Odometry* m);
 
 // Frames messages from one system/component, with its own sequence counter.
@@ -128,6 +140,7 @@ class Encoder {
   static const MessageSpec& spec_of(const Heartbeat&) { return kHeartbeat; }
   static const MessageSpec& spec_of(const StatusText&) { return kStatusText; }
   static const MessageSpec& spec_of(const Odometry&) { return kOdometry; }
+  static const MessageSpec& spec_of(const Timesync&) { return kTimesync; }
   uint8_t system_id_, component_id_;
   uint8_t sequence_ = 0;
 };

@@ -39,6 +39,23 @@ struct PoseLinkCounters {
   uint64_t status_texts_sent = 0;
 };
 
+// What the link has heard from the other MAVLink system on it (the autopilot).
+struct PeerState {
+  bool heard = false;  // a HEARTBEAT from another system
+  uint8_t system_id = 0, component_id = 0, autopilot = 0, type = 0;
+  int64_t last_heartbeat_ns = -1;
+  uint32_t heartbeats = 0;
+  bool silent = false;             // no HEARTBEAT for PoseLink::kPeerSilentNs
+  uint32_t silences = 0;           // times it went silent
+  uint32_t timesync_answered = 0;  // its TIMESYNC requests we answered
+  uint32_t timesync_replies = 0;   // its answers to ours
+  // Its clock minus the clock of our ODOMETRY time_usec, ns, from round trips no longer than
+  // twice the shortest seen; valid once timesync_replies > 0.
+  int64_t clock_offset_ns = 0;
+  int64_t best_round_trip_ns = -1;
+  uint64_t frames = 0;  // good frames received
+};
+
 // The receiving side's inverse of PoseLink's frames: the camera pose T_w_c (world = the first
 // camera) an ODOMETRY describes, given the same body-from-camera extrinsics.
 SE3 camera_pose_of(const mavlink::Odometry& o, const SE3& T_b_c);
@@ -54,20 +71,37 @@ class PoseLink {
   void on_pose(const PoseEstimate& pose, int64_t now_ns);
   // An event for the operator (text is cut to 50 characters).
   void on_status(uint8_t severity, const char* text, int64_t now_ns);
-  // Heartbeat when due, and transport flushing; call at least every frame period.
+  // Heartbeat and TIMESYNC requests when due, what the autopilot sent, and transport flushing;
+  // call at least every frame period.
   void tick(int64_t now_ns, uint8_t system_status);
+  // Relates the clock of ODOMETRY time_usec (the sensor's stamps) to now_ns's: a frame stamped
+  // sensor_ns arrived at arrival_ns. TIMESYNC is answered in the sensor's clock.
+  void set_time_base(int64_t sensor_ns, int64_t arrival_ns) {
+    sensor_minus_now_ns_ = sensor_ns - arrival_ns;
+  }
   const PoseLinkCounters& counters() const { return counters_; }
+  const PeerState& peer() const { return peer_; }
+  static constexpr int64_t kPeerSilentNs = 3'000'000'000;  // three missed 1 Hz heartbeats
 
   // The ODOMETRY a pose becomes (exposed for tests).
   mavlink::Odometry odometry_of(const PoseEstimate& pose);
 
  private:
   bool spend(int n, int64_t now_ns, bool must);
+  void listen(int64_t now_ns);
+  void on_frame(const mavlink::Frame& f, int64_t now_ns);
+  template <typename Message>
+  void send_now(const Message& m, int64_t now_ns);
 
   PoseLinkConfig config_;
   ByteLink* link_ = nullptr;
   mavlink::Encoder encoder_{1, 197};
   uint16_t next_text_id_ = 0;  // of a chunked text; 0 means "not chunked"
+  mavlink::Decoder decoder_;
+  PeerState peer_;
+  int64_t sensor_minus_now_ns_ = 0;
+  int64_t timesync_sent_ns_ = -1;  // now_ns of our pending request
+  int64_t timesync_sent_ts1_ = 0;  // its ts1, in the sensor's clock
   int64_t last_heartbeat_ns_ = -1;
   double tokens_ = 0;
   int64_t tokens_at_ns_ = -1;
