@@ -24,6 +24,9 @@ if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 # libopenni2-dev: the OpenNI2 backend of the dynamic build, and its Dummy device for tests.
 packages=(build-essential cmake libeigen3-dev libpng-dev zlib1g-dev libgpiod-dev googletest file
   python3-open3d libfreenect-dev libopenni2-dev)
+# tools/mavlink-check decodes the link with node-mavlink (pinned in its lockfile). A Node that
+# is already there (with its npm) is used as it is.
+command -v node >/dev/null && command -v npm >/dev/null || packages+=(nodejs npm)
 if $aarch64; then packages+=(g++-aarch64-linux-gnu qemu-user); fi
 if $fuzz; then packages+=(clang); fi  # libFuzzer ships with Debian's clang
 
@@ -49,5 +52,9 @@ if $aarch64 && [ ! -f .sysroot/arm64/usr/lib/aarch64-linux-gnu/libgpiod.a ]; the
   mkdir -p .sysroot/arm64
   for deb in "$work"/*.deb; do dpkg-deb -x "$deb" .sysroot/arm64; done
   rm -rf "$work"
+fi
+if [ ! -d tools/mavlink-check/node_modules/node-mavlink ]; then
+  echo "setup: installing node-mavlink for tools/mavlink-check (npm ci, from its lockfile)"
+  (cd tools/mavlink-check && npm ci --no-audit --no-fund --loglevel=error >/dev/null)
 fi
 echo "setup: done"

@@ -25,6 +25,8 @@ run() {
 
 run host-release
 file build/bin/rgbdtam | grep -q "statically linked" || { echo "host rgbdtam is not static" >&2; exit 1; }
+echo "=== node-mavlink: the link as an independent decoder sees it ($(date +%T))"
+node tools/mavlink-check/check.mjs build/bin/rgbdtam board/host-emulation
 run host-debug -LE long
 # The shared-library sensor backends (libfreenect, tested against fakenect).
 run host-dynamic -LE long
