@@ -56,7 +56,8 @@ namespace {
 // How long a device backend waits for a frame before next() reports it (a stall is longer).
 constexpr int kFrameTimeoutMs = 1000;
 
-Status open_backend(const Board& board, const Params& params, BoardSensor* sensor) {
+Status open_backend(const Board& board, const Params& params, BoardSensor* sensor,
+                    V4l2Io* v4l2_io) {
   const int w = params.camera.width_px, h = params.camera.height_px;
   if (std::strcmp(board.sensor_kind, "replay") == 0) {
     RGBDTAM_RETURN_IF_ERROR(sensor->replay.open(board.sensor_device, w, h,
@@ -77,7 +78,8 @@ Status open_backend(const Board& board, const Params& params, BoardSensor* senso
     }
     std::snprintf(depth, sizeof(depth), "%.*s", static_cast<int>(comma - board.sensor_device),
                   board.sensor_device);
-    RGBDTAM_RETURN_IF_ERROR(sensor->v4l2.open(&sensor->v4l2_io, depth, comma + 1, w, h,
+    RGBDTAM_RETURN_IF_ERROR(sensor->v4l2.open(v4l2_io != nullptr ? v4l2_io : &sensor->v4l2_io,
+                                              depth, comma + 1, w, h,
                                               params.sensor.max_rgb_depth_dt_ns, kFrameTimeoutMs));
     sensor->live = &sensor->v4l2;
     return Status::ok();
@@ -109,7 +111,8 @@ Status open_backend(const Board& board, const Params& params, BoardSensor* senso
 }
 }  // namespace
 
-Status open_board_sensor(const Board& board, const Params& params, BoardSensor* sensor) {
+Status open_board_sensor(const Board& board, const Params& params, BoardSensor* sensor,
+                         V4l2Io* v4l2_io) {
   RecoveryConfig recovery;
   if (board.sensor_usb_id[0] != '\0' && parse_usb_id(board.sensor_usb_id, &recovery.usb)) {
     char what[kTextBytes + 32];
@@ -117,7 +120,7 @@ Status open_board_sensor(const Board& board, const Params& params, BoardSensor* 
     RGBDTAM_RETURN_IF_ERROR(require_usb_device(board.sysfs_root, recovery.usb, what));
     recovery.reset_usb = true;
   }
-  RGBDTAM_RETURN_IF_ERROR(open_backend(board, params, sensor));
+  RGBDTAM_RETURN_IF_ERROR(open_backend(board, params, sensor, v4l2_io));
   recovery.stall_ns = board.sensor_stall_ms * 1'000'000LL;
   recovery.reopen_budget_ns = board.sensor_reopen_budget_ms * 1'000'000LL;
   recovery.error_interval_ns = static_cast<int64_t>(1e9 / board.sensor_fps);
@@ -135,7 +138,7 @@ Status RunJob::init(const RunOptions& options) {
   RGBDTAM_RETURN_IF_ERROR(load_board_and_params(options, &board_, &params_));
   RGBDTAM_RETURN_IF_ERROR(check_memory_budget(params_, 0, 0, memory_budget(board_.memory_budget_mb),
                                               &memory_needed_bytes_));
-  RGBDTAM_RETURN_IF_ERROR(open_board_sensor(board_, params_, &sensor_));
+  RGBDTAM_RETURN_IF_ERROR(open_board_sensor(board_, params_, &sensor_, options.v4l2_io));
   if (std::strcmp(board_.link_kind, "udp") == 0) {
     char ip[64];
     uint16_t port = 0;

@@ -29,6 +29,8 @@ struct RunOptions {
   int param_override_count = 0;
   int max_frames = 0;  // 0: the whole stream
   bool progress = true;
+  V4l2Io* v4l2_io =
+      nullptr;  // a v4l2 board's system calls; null: the real ones (a soak fakes them)
 };
 
 // Reads board_dir/board.conf and validates it.
@@ -50,7 +52,8 @@ struct BoardSensor {
   SensorRecovery recovery;  // wraps whichever backend is open
   LiveSensor* live = nullptr;
 };
-Status open_board_sensor(const Board& board, const Params& params, BoardSensor* sensor);
+Status open_board_sensor(const Board& board, const Params& params, BoardSensor* sensor,
+                         V4l2Io* v4l2_io = nullptr);
 
 class RunJob {
  public:

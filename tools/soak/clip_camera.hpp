@@ -1,0 +1,64 @@
+#pragma once
+// A V4L2 depth camera (a Z16 node and a YUYV node) behind the V4l2Io seam that plays the
+// committed clip in a loop at a fixed rate in real time, and is unplugged for given intervals:
+// every call then fails as an unplugged device does (ENODEV, ENOENT on open). Everything is
+// allocated at construction, so the soak measures the runtime's memory, not the fake's.
+#include <linux/videodev2.h>
+
+#include <atomic>
+#include <cstdint>
+#include <mutex>
+#include <vector>
+
+#include "rgbdtam/hal/v4l2_source.hpp"
+
+namespace rgbdtam::testing {
+
+class ClipCamera : public V4l2Io {
+ public:
+  struct Outage {
+    double at_s, for_s;  // after the start
+  };
+  // The clip's frames (grey, raw depth), played at fps from now on.
+  ClipCamera(std::vector<std::vector<uint8_t>> gray, std::vector<std::vector<uint16_t>> depth,
+             int width, int height, double fps, std::vector<Outage> outages);
+
+  int open(const char* path, int flags) override;
+  int close(int fd) override;
+  int ioctl(int fd, unsigned long request, void* arg) override;
+  void* mmap(size_t length, int fd, off_t offset) override;
+  int munmap(void* address, size_t length) override;
+  int poll(int fd, int timeout_ms) override;
+
+  uint64_t frames_played() const { return played_.load(); }
+  int outages_started() const { return outages_started_.load(); }
+
+ private:
+  static constexpr int kBuffers = 4;
+  struct Node {
+    uint32_t fourcc;
+    bool open = false;
+    int64_t next_frame = 0;  // the first not yet delivered
+    std::vector<uint8_t> buffers[kBuffers];
+    int queued[kBuffers] = {};
+    int queued_count = 0;
+  };
+  bool unplugged(int64_t now_ns);
+  int64_t due_ns(int64_t frame) const;
+  Node* node(int fd);
+  void fill(const Node& n, int64_t frame, std::vector<uint8_t>* out) const;
+
+  std::vector<std::vector<uint8_t>> gray_;
+  std::vector<std::vector<uint16_t>> depth_;
+  int width_, height_;
+  int64_t period_ns_;
+  int64_t start_ns_;
+  std::vector<Outage> outages_;
+  Node nodes_[2];  // fd 3: depth, fd 4: colour
+  std::atomic<uint64_t> played_{0};
+  std::atomic<int> outages_started_{0};
+  int last_outage_ = -1;
+  std::mutex mutex_;  // the sensor's thread and a reopen may call at once
+};
+
+}  // namespace rgbdtam::testing
