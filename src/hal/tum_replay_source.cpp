@@ -44,7 +44,7 @@ Status parse_tum_list(const char* text, const char* source, TumList* out) {
     const char* end = line + length;
     ++line_no;
     const char* s = skip_blanks(line);
-    if (s < end && *s != '#' && *s != '\r') {
+    if (s < end && *s != '#') {
       TumListEntry& e = out->entries[out->size];
       const char* after = parse_seconds_ns(s, &e.timestamp_ns);
       const char* name = after != nullptr ? skip_blanks(after) : nullptr;

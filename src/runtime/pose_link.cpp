@@ -117,6 +117,14 @@ void PoseLink::on_pose(const PoseEstimate& pose, int64_t now_ns) {
   }
 }
 
+template <typename Message>
+bool PoseLink::send_now(const Message& m, int64_t now_ns) {
+  uint8_t frame[mavlink::kMaxFrameBytes];
+  const int n = encoder_.encode(m, frame);
+  (void)spend(n, now_ns, true);
+  return link_->send(frame, static_cast<size_t>(n));
+}
+
 void PoseLink::on_status(uint8_t severity, const char* text, int64_t now_ns) {
   mavlink::StatusText s;
   s.severity = severity;
@@ -132,21 +140,10 @@ void PoseLink::on_status(uint8_t severity, const char* text, int64_t now_ns) {
     std::memset(s.text, 0, kChunk);
     const size_t n_chars = std::min(kChunk, length - std::min(length, at));
     std::memcpy(s.text, text + at, n_chars);
-    uint8_t frame[mavlink::kMaxFrameBytes];
-    const int n = encoder_.encode(s, frame);
-    (void)spend(n, now_ns, true);
-    if (link_->send(frame, static_cast<size_t>(n))) ++counters_.status_texts_sent;
+    if (send_now(s, now_ns)) ++counters_.status_texts_sent;
     if (n_chars < kChunk || s.id == 0) break;
     ++s.chunk_seq;
   }
-}
-
-template <typename Message>
-void PoseLink::send_now(const Message& m, int64_t now_ns) {
-  uint8_t frame[mavlink::kMaxFrameBytes];
-  const int n = encoder_.encode(m, frame);
-  (void)spend(n, now_ns, true);
-  (void)link_->send(frame, static_cast<size_t>(n));
 }
 
 void PoseLink::on_frame(const mavlink::Frame& f, int64_t now_ns) {
@@ -173,7 +170,7 @@ void PoseLink::on_frame(const mavlink::Frame& f, int64_t now_ns) {
       answer.ts1 = t.ts1;
       answer.target_system = f.system_id;
       answer.target_component = f.component_id;
-      send_now(answer, now_ns);
+      (void)send_now(answer, now_ns);
       ++peer_.timesync_answered;
     } else if (timesync_sent_ns_ >= 0 && t.ts1 == timesync_sent_ts1_) {  // our answer
       const int64_t round_trip = now_ns - timesync_sent_ns_;
@@ -212,10 +209,7 @@ void PoseLink::tick(int64_t now_ns, uint8_t system_status) {
     last_heartbeat_ns_ = now_ns;
     mavlink::Heartbeat hb;
     hb.system_status = system_status;
-    uint8_t frame[mavlink::kMaxFrameBytes];
-    const int n = encoder_.encode(hb, frame);
-    (void)spend(n, now_ns, true);
-    if (link_->send(frame, static_cast<size_t>(n))) ++counters_.heartbeats_sent;
+    if (send_now(hb, now_ns)) ++counters_.heartbeats_sent;
     // Our own TIMESYNC, once a second to a peer that is there, measures its clock.
     if (peer_.heard && !peer_.silent) {
       mavlink::Timesync request;
@@ -224,7 +218,7 @@ void PoseLink::tick(int64_t now_ns, uint8_t system_status) {
       request.target_component = peer_.component_id;
       timesync_sent_ns_ = now_ns;
       timesync_sent_ts1_ = request.ts1;
-      send_now(request, now_ns);
+      (void)send_now(request, now_ns);
     }
   }
   link_->flush();

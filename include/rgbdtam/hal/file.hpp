@@ -33,7 +33,6 @@ class OutputFile {
   // Flushes, closes and renames into place; the first failure, if any.
   Status commit();
   const Status& status() const { return status_; }
-  const char* path() const { return path_; }
 
  private:
   Status fail(const char* what);

@@ -27,7 +27,6 @@ class TrajectoryWriter {
   // The first write failure, naming the file and the reason; every later write returns it too.
   Status write(const PoseEstimate& pose);
   Status close();
-  const char* path() const { return file_.path(); }
 
  private:
   OutputFile file_;

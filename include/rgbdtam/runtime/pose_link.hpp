@@ -90,8 +90,9 @@ class PoseLink {
   bool spend(int n, int64_t now_ns, bool must);
   void listen(int64_t now_ns);
   void on_frame(const mavlink::Frame& f, int64_t now_ns);
+  // A message that must go out (status, heartbeat, TIMESYNC): spent past the rate policy.
   template <typename Message>
-  void send_now(const Message& m, int64_t now_ns);
+  bool send_now(const Message& m, int64_t now_ns);
 
   PoseLinkConfig config_;
   ByteLink* link_ = nullptr;
