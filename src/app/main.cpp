@@ -12,30 +12,31 @@
 #include <memory>
 #include <string>
 
+#include "config_files.hpp"
 #include "evaluate_command.hpp"
 #include "record_job.hpp"
 #include "replay_job.hpp"
 #include "rgbdtam/hal/file.hpp"
 #include "rgbdtam/hal/ply_map_writer.hpp"
 #include "run_job.hpp"
+#include "vocabulary_command.hpp"
 
 namespace rgbdtam {
 namespace {
-
-constexpr size_t kMaxConfigBytes = 1 << 20;
 
 void usage() {
   std::fprintf(stderr,
                "usage:\n"
                "  rgbdtam replay <sequence-dir> --config <file> [--trajectory out.txt]\n"
-               "                 [--map map.ply] [--set key=value]... [--max-frames N] [--quiet]\n"
-               "                 [--json]\n"
+               "                 [--final-trajectory out.txt] [--map map.ply]\n"
+               "                 [--set key=value]... [--max-frames N] [--quiet] [--json]\n"
                "  rgbdtam eval <groundtruth.txt> <estimate.txt> [--json] [--frames rgb.txt]\n"
                "  rgbdtam params --config <file> [--set key=value]...\n"
                "  rgbdtam run --board <board-folder> [--board-set key=value]...\n"
                "              [--set key=value]... [--max-frames N] [--quiet]\n"
                "  rgbdtam record --board <board-folder> <out-dir> [--board-set key=value]...\n"
                "                 [--max-frames N]\n"
+               "  rgbdtam vocabulary train <sequence-dir>... --config <file> --out <file>\n"
                "sensor backends in this build: " RGBDTAM_HAL_BACKENDS "\n");
 }
 
@@ -76,11 +77,7 @@ Status load_params(const ConfigArgs& c, Params* p) {
   if (c.config == nullptr) {
     return Status::error(StatusCode::kInvalidArgument, "--config <file> is required");
   }
-  char* text = nullptr;
-  RGBDTAM_RETURN_IF_ERROR(read_text_file(c.config, kMaxConfigBytes, &text));
-  const Status s = parse_params(text, c.config, p);
-  delete[] text;
-  RGBDTAM_RETURN_IF_ERROR(s);
+  RGBDTAM_RETURN_IF_ERROR(read_params_file(c.config, p));
   for (int i = 0; i < c.override_count; ++i) {
     RGBDTAM_RETURN_IF_ERROR(set_param(c.overrides[i], "--set", p));
   }
@@ -157,6 +154,8 @@ int replay_command(int argc, char** argv) {
     if (take_config_arg(argc, argv, &i, &c)) continue;
     if (std::strcmp(argv[i], "--trajectory") == 0 && i + 1 < argc) {
       options.trajectory_path = argv[++i];
+    } else if (std::strcmp(argv[i], "--final-trajectory") == 0 && i + 1 < argc) {
+      options.final_trajectory_path = argv[++i];
     } else if (std::strcmp(argv[i], "--map") == 0 && i + 1 < argc) {
       map_path = argv[++i];
     } else if (std::strcmp(argv[i], "--max-frames") == 0 && i + 1 < argc) {
@@ -179,6 +178,8 @@ int replay_command(int argc, char** argv) {
     return 2;
   }
   if (replaces_an_input("--trajectory", options.trajectory_path, c.config, options.sequence) ||
+      replaces_an_input("--final-trajectory", options.final_trajectory_path, c.config,
+                        options.sequence) ||
       replaces_an_input("--map", map_path, c.config, options.sequence)) {
     return 2;
   }
@@ -251,6 +252,11 @@ int replay_command(int argc, char** argv) {
     report = evaluate_all(gt, job->estimates(), &stamps);
     report.nees = evaluate_frame_to_frame_nees(gt, job->estimates(), job->covariances());
     if (!json) print_report(report, false, "all frames");
+    if (!json && job->loop_enabled()) {
+      // Offline figures: each frame on its keyframe as the final map places it.
+      const EvaluationReport final_report = evaluate_all(gt, job->final_estimates(), &stamps);
+      print_report(final_report, false, "final map, all frames");
+    }
   }
   if (json) job->print_json(report);
   if (s.is_ok() && job->estimates().empty()) {
@@ -367,6 +373,9 @@ int main(int argc, char** argv) {
   if (std::strcmp(verb, "params") == 0) return rgbdtam::params_command(argc - 2, argv + 2);
   if (std::strcmp(verb, "run") == 0) return rgbdtam::run_command(argc - 2, argv + 2);
   if (std::strcmp(verb, "record") == 0) return rgbdtam::record_command(argc - 2, argv + 2);
+  if (std::strcmp(verb, "vocabulary") == 0) {
+    return rgbdtam::vocabulary_command(argc - 2, argv + 2);
+  }
   if (std::strcmp(verb, "--help") == 0 || std::strcmp(verb, "help") == 0) {
     rgbdtam::usage();
     return 0;

@@ -21,9 +21,9 @@ MemoryBudget memory_budget(int board_mb) {
   return b;
 }
 
-Status check_memory_budget(const Params& params, size_t per_frame_bytes, int frames,
-                           const MemoryBudget& budget, uint64_t* needed_bytes) {
-  const MemoryNeed need = memory_need(params);
+Status check_memory_budget(const Params& params, int vocabulary_words, size_t per_frame_bytes,
+                           int frames, const MemoryBudget& budget, uint64_t* needed_bytes) {
+  const MemoryNeed need = memory_need(params, vocabulary_words);
   const uint64_t results = static_cast<uint64_t>(per_frame_bytes) * static_cast<uint64_t>(frames);
   *needed_bytes = need.total() + results;
   if (budget.bytes == 0 || *needed_bytes <= budget.bytes) return Status::ok();
@@ -32,11 +32,12 @@ Status check_memory_budget(const Params& params, size_t per_frame_bytes, int fra
   return Status::error(
       StatusCode::kOutOfRange,
       "needs %.0f MB, over the %.0f MB budget (%s): map.keyframe_pool %d x %.1f MB, "
-      "map.queue_frames+map.seeds %.0f MB, camera size %.0f MB, %d frames %.0f MB; lower "
-      "map.keyframe_pool",
+      "map.queue_frames+map.seeds %.0f MB, camera size %.0f MB, loop.places %.0f MB, %d frames "
+      "%.0f MB; lower map.keyframe_pool",
       static_cast<double>(*needed_bytes) / kMb, static_cast<double>(budget.bytes) / kMb,
       budget.from, params.keyframe_pool_size, static_cast<double>(need.per_keyframe) / kMb,
-      static_cast<double>(need.mapper) / kMb, static_cast<double>(need.images) / kMb, frames,
+      static_cast<double>(need.mapper) / kMb, static_cast<double>(need.images) / kMb,
+      static_cast<double>(need.loop) / kMb, frames,
       static_cast<double>(results) / kMb);
 }
 

@@ -16,9 +16,11 @@ struct MemoryBudget {
 
 // board_mb > 0: that many MB (memory.budget_mb); 0: half of the machine's physical memory.
 MemoryBudget memory_budget(int board_mb);
-// per_frame_bytes x frames: what the job keeps for every frame (a replay's results).
-// Ok when the need fits; *needed_bytes is the need either way.
-Status check_memory_budget(const Params& params, size_t per_frame_bytes, int frames,
+// vocabulary_words: of the loaded vocabulary, 0 without loop closure. per_frame_bytes x
+// frames: what the job keeps for every frame (a replay's results). Ok when the need fits;
+// *needed_bytes is the need either way.
+Status check_memory_budget(const Params& params, int vocabulary_words, size_t per_frame_bytes,
+                           int frames,
                            const MemoryBudget& budget, uint64_t* needed_bytes);
 
 }  // namespace rgbdtam

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "config_files.hpp"
 #include "json_line.hpp"
 #include "memory_budget.hpp"
 #include "rgbdtam/hal/clock.hpp"
@@ -30,15 +31,22 @@ Status ReplayJob::init(const ReplayOptions& options) {
                  source_.depth_list().bad_lines, source_.depth_list().first_problem.message());
   }
   const size_t per_frame = sizeof(StampedPose) + sizeof(Eigen::Matrix<double, 6, 6>);
-  RGBDTAM_RETURN_IF_ERROR(check_memory_budget(p, per_frame, source_.frame_count(), memory_budget(0),
+  Status vocabulary_error;
+  const bool loop = load_vocabulary(p, &vocabulary_, &vocabulary_error);
+  RGBDTAM_RETURN_IF_ERROR(vocabulary_error);
+  RGBDTAM_RETURN_IF_ERROR(check_memory_budget(p, loop ? vocabulary_.words() : 0, per_frame,
+                                              source_.frame_count(), memory_budget(0),
                                               &memory_needed_bytes_));
-  RGBDTAM_RETURN_IF_ERROR(system_.init(p, monotonic_ns, options.map_sink));
+  RGBDTAM_RETURN_IF_ERROR(
+      system_.init(p, monotonic_ns, options.map_sink, loop ? &vocabulary_ : nullptr));
   RGBDTAM_RETURN_IF_ERROR(system_.start());
   if (options.trajectory_path != nullptr) {
     RGBDTAM_RETURN_IF_ERROR(writer_.open(options.trajectory_path));
   }
   estimates_.reserve(static_cast<size_t>(source_.frame_count()));
   covariances_.reserve(static_cast<size_t>(source_.frame_count()));
+  on_keyframes_.reserve(static_cast<size_t>(source_.frame_count()));
+  final_estimates_.reserve(static_cast<size_t>(source_.frame_count()));
   started_ns_ = monotonic_ns();
   return Status::ok();
 }
@@ -64,9 +72,16 @@ bool ReplayJob::step() {
   const int64_t t2 = monotonic_ns();
   system_.map_pending();
   write_failure_ = writer_.write(last_pose_);
+  const double t_s = static_cast<double>(last_pose_.timestamp_ns) * 1e-9;
   if ((last_pose_.flags & kPoseValid) != 0) {
-    estimates_.push_back({static_cast<double>(last_pose_.timestamp_ns) * 1e-9, last_pose_.T_w_c});
+    estimates_.push_back({t_s, last_pose_.T_w_c});
     covariances_.push_back(pose_covariance(last_pose_));
+  }
+  if ((last_pose_.flags & (kPoseValid | kSettling)) != 0) {
+    SE3 T_w_k;
+    const bool found = system_.keyframe_pose(last_pose_.keyframe_id, &T_w_k);
+    on_keyframes_.push_back({t_s, last_pose_.keyframe_id,
+                             found ? T_w_k.inverse() * last_pose_.T_w_c : last_pose_.T_w_c, found});
   }
   const int64_t t3 = monotonic_ns();
   tracking_ms_.add(t2 - t1);
@@ -82,7 +97,27 @@ bool ReplayJob::step() {
 Status ReplayJob::finish() {
   system_.finish();
   finished_ns_ = monotonic_ns();
-  const Status closed = writer_.close();
+  Status closed = writer_.close();
+  final_estimates_.clear();
+  for (const OnKeyframe& f : on_keyframes_) {
+    SE3 T_w_k;
+    const bool placed = f.relative && system_.keyframe_pose(f.keyframe_id, &T_w_k);
+    // A keyframe the map forgot: the frame keeps the pose it was reported with.
+    final_estimates_.push_back({f.t_s, placed ? T_w_k * f.T_k_c : f.T_k_c});
+  }
+  if (options_.final_trajectory_path != nullptr && closed.is_ok()) {
+    TrajectoryWriter final_writer;
+    closed = final_writer.open(options_.final_trajectory_path);
+    for (const StampedPose& p : final_estimates_) {
+      if (!closed.is_ok()) break;
+      PoseEstimate e;
+      e.timestamp_ns = static_cast<int64_t>(std::llround(p.stamp_s * 1e9));
+      e.T_w_c = p.T_w_c;
+      e.flags = kPoseValid;
+      closed = final_writer.write(e);
+    }
+    if (closed.is_ok()) closed = final_writer.close();
+  }
   return write_failure_.is_ok() ? closed : write_failure_;
 }
 
@@ -117,6 +152,17 @@ void ReplayJob::print_summary() const {
         m.points_multiview / n, m.points_fused / n,
         system_.mapper().time_per_keyframe().percentile_ms(0.5),
         system_.mapper().time_per_keyframe().percentile_ms(0.95));
+  }
+  if (system_.loop_enabled()) {
+    const LoopCounters& l = system_.loop().counters();
+    std::printf(
+        "loop: %u places, %u candidates verified, %u passed, %u loops, %u corrections (%u "
+        "adopted, %u dropped); %u relocalised; %u keyframes dropped at the queue; ms describe "
+        "median %.1f, query %.1f, pose graph max %.1f\n",
+        l.keyframes, l.candidates, l.verified, l.loops, l.corrections, c.loop_corrections,
+        l.corrections_dropped, c.relocalised, c.loop_dropped_keyframes,
+        system_.loop().describe_time().percentile_ms(0.5),
+        system_.loop().query_time().percentile_ms(0.5), system_.loop().optimise_time().max_ms());
   }
   std::printf("memory: %.0f MB allocated at init (half of this machine's memory is the budget)\n",
               static_cast<double>(memory_needed_bytes_) / (1 << 20));

@@ -17,6 +17,9 @@ namespace rgbdtam {
 struct ReplayOptions {
   const char* sequence = nullptr;
   const char* trajectory_path = nullptr;  // optional
+  // Optional: every tracked frame again at the end, placed on its keyframe as the final map
+  // has it (after loop closures), as offline SLAM evaluations report.
+  const char* final_trajectory_path = nullptr;
   MapSink* map_sink = nullptr;            // optional: receives each keyframe's map
   Params params;
   bool progress = true;
@@ -37,6 +40,8 @@ class ReplayJob {
   void print_json(const EvaluationReport& report) const;
 
   const std::vector<StampedPose>& estimates() const { return estimates_; }
+  // After finish(): every tracked frame (withheld ones too) on its keyframe's final pose.
+  const std::vector<StampedPose>& final_estimates() const { return final_estimates_; }
   // Of each estimate: the reported pose covariance, (translation, rotation) in the camera.
   const std::vector<Eigen::Matrix<double, 6, 6>>& covariances() const { return covariances_; }
   const TrackingCounters& counters() const { return system_.tracking().counters(); }
@@ -44,14 +49,25 @@ class ReplayJob {
   const LatencyStats& frame_time() const { return frame_ms_; }
   const TumReplaySource& source() const { return source_; }
   const MappingModule& mapper() const { return system_.mapper(); }
+  bool loop_enabled() const { return system_.loop_enabled(); }
+  const LoopCounters& loop_counters() const { return system_.loop().counters(); }
 
  private:
   ReplayOptions options_;
   TumReplaySource source_;
+  Vocabulary vocabulary_;  // before system_, which refers to it
   SlamSystem system_;
   TrajectoryWriter writer_;
   std::vector<StampedPose> estimates_;                    // reserved for every frame at init
   std::vector<Eigen::Matrix<double, 6, 6>> covariances_;  // the same
+  struct OnKeyframe {
+    double t_s;
+    uint32_t keyframe_id;
+    SE3 T_k_c;  // or T_w_c when the keyframe was not found
+    bool relative;
+  };
+  std::vector<OnKeyframe> on_keyframes_;  // the same
+  std::vector<StampedPose> final_estimates_;
   LatencyStats tracking_ms_, frame_ms_;
   PoseEstimate last_pose_;
   int processed_ = 0;

@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <cstring>
 
+#include "config_files.hpp"
 #include "memory_budget.hpp"
 #include "rgbdtam/hal/clock.hpp"
 #include "rgbdtam/hal/file.hpp"
@@ -16,14 +17,6 @@
 namespace rgbdtam {
 namespace {
 constexpr size_t kMaxConfigBytes = 1 << 20;
-
-Status read_params(const char* path, Params* p) {
-  char* text = nullptr;
-  RGBDTAM_RETURN_IF_ERROR(read_text_file(path, kMaxConfigBytes, &text));
-  const Status s = parse_params(text, path, p);
-  delete[] text;
-  return s;
-}
 }  // namespace
 
 Status load_board(const char* board_dir, Board* out) {
@@ -45,7 +38,7 @@ Status load_board_and_params(const RunOptions& options, Board* board, Params* pa
     RGBDTAM_RETURN_IF_ERROR(set_board_value(options.board_overrides[i], board));
   }
   RGBDTAM_RETURN_IF_ERROR(validate_board(*board));
-  RGBDTAM_RETURN_IF_ERROR(read_params(board->sensor_config, params));
+  RGBDTAM_RETURN_IF_ERROR(read_params_file(board->sensor_config, params));
   for (int i = 0; i < options.param_override_count; ++i) {
     RGBDTAM_RETURN_IF_ERROR(set_param(options.param_overrides[i], "--set", params));
   }
@@ -136,7 +129,11 @@ RunJob::~RunJob() { finish(); }
 Status RunJob::init(const RunOptions& options) {
   options_ = options;
   RGBDTAM_RETURN_IF_ERROR(load_board_and_params(options, &board_, &params_));
-  RGBDTAM_RETURN_IF_ERROR(check_memory_budget(params_, 0, 0, memory_budget(board_.memory_budget_mb),
+  Status vocabulary_error;
+  const bool loop = load_vocabulary(params_, &vocabulary_, &vocabulary_error);
+  RGBDTAM_RETURN_IF_ERROR(vocabulary_error);
+  RGBDTAM_RETURN_IF_ERROR(check_memory_budget(params_, loop ? vocabulary_.words() : 0, 0, 0,
+                                              memory_budget(board_.memory_budget_mb),
                                               &memory_needed_bytes_));
   RGBDTAM_RETURN_IF_ERROR(open_board_sensor(board_, params_, &sensor_, options.v4l2_io));
   if (std::strcmp(board_.link_kind, "udp") == 0) {
@@ -161,7 +158,8 @@ Status RunJob::init(const RunOptions& options) {
     gpio_ = std::move(chip);
   }
   runtime_ = std::make_unique<FirmwareRuntime>();
-  return runtime_->init(params_, board_, link_.get(), gpio_.get(), monotonic_ns);
+  return runtime_->init(params_, board_, link_.get(), gpio_.get(), monotonic_ns,
+                        loop ? &vocabulary_ : nullptr);
 }
 
 Status RunJob::start() {

@@ -79,6 +79,7 @@ class RunJob {
   RunOptions options_;
   Board board_;
   Params params_;
+  Vocabulary vocabulary_;
   BoardSensor sensor_;
   std::unique_ptr<ByteLink> link_;
   std::unique_ptr<GpioOutputs> gpio_;

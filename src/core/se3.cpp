@@ -59,4 +59,13 @@ Vector6d SE3::log() const {
   return xi;
 }
 
+Matrix6d adjoint(const SE3& T) {
+  Matrix6d A = Matrix6d::Zero();
+  const Matrix3d R = T.rotation();
+  A.topLeftCorner<3, 3>() = R;
+  A.topRightCorner<3, 3>() = hat(T.translation()) * R;
+  A.bottomRightCorner<3, 3>() = R;
+  return A;
+}
+
 }  // namespace rgbdtam

@@ -5,6 +5,12 @@
 
 namespace rgbdtam {
 
+bool within_motion_limits(const SE3& T_last_current, double dt_s, const HealthLimits& limits) {
+  const double speed = T_last_current.translation().norm() / dt_s;
+  const double rate = so3_log(T_last_current.quaternion()).norm() / dt_s;
+  return speed <= limits.max_speed_m_s && rate <= limits.max_rotation_rate_rad_s;
+}
+
 uint32_t failed_health_checks(const TrackResult& r, const HealthContext& context,
                               const HealthLimits& limits) {
   uint32_t failed = 0;
@@ -30,9 +36,7 @@ uint32_t failed_health_checks(const TrackResult& r, const HealthContext& context
     failed |= kIllConditioned;
   }
   if (context.dt_s > 0.0) {
-    const double speed = context.T_last_current.translation().norm() / context.dt_s;
-    const double rate = so3_log(context.T_last_current.quaternion()).norm() / context.dt_s;
-    if (!(speed <= limits.max_speed_m_s) || !(rate <= limits.max_rotation_rate_rad_s)) {
+    if (!within_motion_limits(context.T_last_current, context.dt_s, limits)) {
       failed |= kTooFast;
     }
   }

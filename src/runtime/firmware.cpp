@@ -6,16 +6,17 @@
 namespace rgbdtam {
 
 Status FirmwareRuntime::init(const Params& params, const Board& board, ByteLink* link,
-                             GpioOutputs* gpio, ClockFn clock) {
+                             GpioOutputs* gpio, ClockFn clock, const Vocabulary* vocabulary) {
   RGBDTAM_RETURN_IF_ERROR(validate_board(board));
   params_ = params;
   params_.map_threaded = true;
+  params_.loop.threaded = true;
   RGBDTAM_RETURN_IF_ERROR(apply_board_capacity(board, &params_));
   board_ = board;
   clock_ = clock;
   gpio_ = gpio;
   period_ns_ = static_cast<int64_t>(1e9 / board.sensor_fps);
-  RGBDTAM_RETURN_IF_ERROR(slam_.init(params_, clock, nullptr));
+  RGBDTAM_RETURN_IF_ERROR(slam_.init(params_, clock, nullptr, vocabulary));
   PoseLinkConfig link_config;
   link_config.system_id = static_cast<uint8_t>(board.link_system_id);
   link_config.component_id = static_cast<uint8_t>(board.link_component_id);
@@ -27,7 +28,8 @@ Status FirmwareRuntime::init(const Params& params, const Board& board, ByteLink*
 
 Status FirmwareRuntime::start() {
   RGBDTAM_RETURN_IF_ERROR(place_this_thread(board_.tracker, "rgbdtam-tracker"));
-  RGBDTAM_RETURN_IF_ERROR(slam_.start(board_.mapper));
+  // The loop module shares the mapper's core: both are background work.
+  RGBDTAM_RETURN_IF_ERROR(slam_.start(board_.mapper, board_.mapper));
   RGBDTAM_RETURN_IF_ERROR(link_.start(board_.link));
   started_ = true;
   return Status::ok();
@@ -56,7 +58,12 @@ PoseEstimate FirmwareRuntime::on_frame(const SensorFrame& frame, int64_t arrival
     post_event(mavlink::kMavSeverityWarning, text);
   } else if (valid && lost_) {
     lost_ = false;
-    post_event(mavlink::kMavSeverityInfo, "rgbdtam: tracking regained");
+    post_event(mavlink::kMavSeverityInfo, (pose.flags & kRelocalised) != 0
+                                              ? "rgbdtam: relocalised in the map"
+                                              : "rgbdtam: tracking regained");
+  }
+  if ((pose.flags & kLoopCorrected) != 0) {
+    post_event(mavlink::kMavSeverityInfo, "rgbdtam: loop closed, map corrected");
   }
   if (!pool_full_reported_ && slam_.tracking().keyframes().recycled() > 0) {
     pool_full_reported_ = true;

@@ -29,7 +29,8 @@ char* trim(char* s) {
 }
 
 Status assign(const KeySpec& spec, const char* value, const char* where, void* target) {
-  if (*value == '\0') {
+  // An empty text is a value ("none"); an empty number is not.
+  if (*value == '\0' && spec.type != ValueType::kText) {
     return Status::error(StatusCode::kInvalidArgument, "%s: key '%s' has no value", where,
                          spec.key);
   }

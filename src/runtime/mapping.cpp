@@ -106,8 +106,13 @@ void MappingModule::remember(const MapperFrame& frame) {
 
 void MappingModule::step(const MapperFrame& frame) {
   if (frame.reset_counter != reset_counter_) {
+    // The poses jumped (a restart, a relocalisation, a loop correction): what is open was
+    // measured in the old frame, so it is finished with the frames it has.
     reset_counter_ = frame.reset_counter;
     earlier_count_ = 0;
+    for (Job& job : jobs_) {
+      if (job.keyframe != nullptr) finalize(&job);
+    }
   }
   if (frame.new_keyframe != nullptr) {
     // A free slot, or else the oldest open keyframe is finished first.
@@ -204,44 +209,6 @@ void MappingModule::finalize(Job* job) {
   ++counters_.keyframes_mapped;
   per_keyframe_.add(job->spent_ns + clock_() - t0);
   job->keyframe = nullptr;
-}
-
-MappingThread::~MappingThread() {
-  if (thread_.joinable()) stop();
-}
-
-Status MappingThread::start(MapperQueue* queue, MappingModule* mapper,
-                            const ThreadPlacement& placement) {
-  queue_ = queue;
-  mapper_ = mapper;
-  stopping_ = false;
-  thread_ = std::thread([this] { run(); });
-  return place_thread(thread_, placement, "rgbdtam-mapper");
-}
-
-void MappingThread::notify() { wake_.notify_one(); }
-
-void MappingThread::stop() {
-  stopping_.store(true, std::memory_order_release);
-  wake_.notify_one();
-  thread_.join();
-}
-
-void MappingThread::run() {
-  for (;;) {
-    if (MapperFrame* f = queue_->front()) {
-      mapper_->step(*f);
-      queue_->pop();
-      continue;
-    }
-    if (stopping_.load(std::memory_order_acquire)) break;
-    std::unique_lock<std::mutex> lock(mutex_);
-    // The timeout covers a notify that lands between the check above and this wait.
-    wake_.wait_for(lock, std::chrono::milliseconds(5), [this] {
-      return stopping_.load(std::memory_order_acquire) || queue_->front() != nullptr;
-    });
-  }
-  mapper_->finish();
 }
 
 }  // namespace rgbdtam

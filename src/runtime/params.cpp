@@ -1,5 +1,8 @@
 #include "rgbdtam/runtime/params.hpp"
 
+#include <cstdio>
+#include <cstring>
+
 #include "rgbdtam/runtime/key_value.hpp"
 
 namespace rgbdtam {
@@ -120,6 +123,40 @@ const KeySpec kSpecs[] = {
      RGBDTAM_FIELD(map_min_baseline_ratio), false},
     {"map.seeds", ValueType::kInt, 100, 100000, "", "edge pixels mapped per keyframe",
      RGBDTAM_FIELD(map_seeds), false},
+    {"loop.enabled", ValueType::kBool, 0, 1, "",
+     "loop closure, relocalisation and map reuse (needs loop.vocabulary)",
+     RGBDTAM_FIELD(loop.enabled), false},
+    {"loop.threaded", ValueType::kBool, 0, 1, "",
+     "run the loop module on its own thread (else synchronously, deterministic)",
+     RGBDTAM_FIELD(loop.threaded), false},
+    {"loop.relocalise", ValueType::kBool, 0, 1, "",
+     "look lost frames up in the map (else a restart joins the map at the next loop)",
+     RGBDTAM_FIELD(loop.relocalise), false},
+    {"loop.vocabulary", ValueType::kText, 0, 0, "",
+     "bag-of-words vocabulary file (rgbdtam vocabulary train), relative to this file",
+     RGBDTAM_FIELD(loop.vocabulary), false},
+    {"loop.places", ValueType::kInt, 8, 100000, "",
+     "keyframes remembered as places; when full the oldest is forgotten",
+     RGBDTAM_FIELD(loop.places), false},
+    {"loop.features", ValueType::kInt, 50, 4000, "", "features per keyframe",
+     RGBDTAM_FIELD(loop.features), false},
+    {"loop.queue_keyframes", ValueType::kInt, 1, 64, "",
+     "tracker-to-loop queue slots; a full queue leaves the keyframe out of the map",
+     RGBDTAM_FIELD(loop.queue_keyframes), false},
+    {"loop.min_age", ValueType::kReal, 0, 1e6, "s",
+     "a place of the same unbroken stretch is a loop candidate only this long after",
+     RGBDTAM_FIELD(loop.min_age_s), false},
+    {"loop.min_inliers", ValueType::kInt, 6, 4000, "",
+     "3-D feature matches one rigid motion must explain to accept a place",
+     RGBDTAM_FIELD(loop.min_inliers), false},
+    {"loop.consistent_queries", ValueType::kInt, 1, 10, "",
+     "consecutive keyframes that must find the same place before a loop is closed",
+     RGBDTAM_FIELD(loop.consistent_queries), false},
+    {"loop.min_correction", ValueType::kReal, 0, 10, "m",
+     "a verified loop moves the map only beyond this disagreement",
+     RGBDTAM_FIELD(loop.min_correction_m), false},
+    {"loop.min_correction_angle", ValueType::kDegreesAsRadians, 0, 180, "deg",
+     "... or beyond this angle", RGBDTAM_FIELD(loop.min_correction_rad), false},
     // tracker.lost_sigma_ratio: now health.max_sigma_ratio.
     // tracker.lost_frames_before_reset: now health.reset_after_lost_ms.
     {"health.min_residuals", ValueType::kInt, 6, 1e6, "",
@@ -183,9 +220,35 @@ Status check_consistency(const char* source, const Params& p) {
 }
 }  // namespace
 
+namespace {
+// A file named in a parameter file is found beside it: a relative path gets the folder of
+// `source` (when it has one) in front.
+Status resolve_beside(const char* source, const char* key, char* path, size_t size) {
+  const char* slash = std::strrchr(source, '/');
+  if (path[0] == '\0' || path[0] == '/' || slash == nullptr) return Status::ok();
+  char joined[kTextBytes];
+  const int n = std::snprintf(joined, sizeof(joined), "%.*s/%s", static_cast<int>(slash - source),
+                              source, path);
+  if (n < 0 || static_cast<size_t>(n) >= sizeof(joined) || static_cast<size_t>(n) >= size) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "%s: key '%s': the path joined to the file's folder is too long", source,
+                         key);
+  }
+  std::memcpy(path, joined, static_cast<size_t>(n) + 1);
+  return Status::ok();
+}
+}  // namespace
+
 Status parse_params(const char* text, const char* source, Params* out) {
   Params p = *out;
+  p.loop.vocabulary[0] = '\0';
   RGBDTAM_RETURN_IF_ERROR(parse_key_values(text, source, kTable, &p));
+  if (p.loop.vocabulary[0] == '\0') {
+    std::memcpy(p.loop.vocabulary, out->loop.vocabulary, sizeof(p.loop.vocabulary));
+  } else {
+    RGBDTAM_RETURN_IF_ERROR(
+        resolve_beside(source, "loop.vocabulary", p.loop.vocabulary, sizeof(p.loop.vocabulary)));
+  }
   RGBDTAM_RETURN_IF_ERROR(check_consistency(source, p));
   *out = p;
   return Status::ok();

@@ -2,7 +2,7 @@
 
 namespace rgbdtam {
 
-MemoryNeed memory_need(const Params& p) {
+MemoryNeed memory_need(const Params& p, int vocabulary_words) {
   // The pyramids, undistortion maps and scratch images of the tracker and of the mapper, per
   // pixel of the camera; measured by test_allocations (it counts what init allocates).
   constexpr size_t kTrackerImageBytesPerPixel = 94, kMapperImageBytesPerPixel = 86;
@@ -21,12 +21,35 @@ MemoryNeed memory_need(const Params& p) {
   }
   m.images =
       pixels * (kTrackerImageBytesPerPixel + (p.map_enabled ? kMapperImageBytesPerPixel : 0));
+  if (p.loop.enabled && vocabulary_words > 0) {
+    // The features' scratch images (3 float images and a corner list) twice, the keyframe
+    // queue's images, the corrections and the pose graph.
+    constexpr size_t kFeatureBytesPerPixel = 3 * sizeof(float) + 2;
+    constexpr size_t kGraphBytesPerPlace = 3 * sizeof(Matrix6d) + 6 * sizeof(Vector6d) +
+                                           2 * (sizeof(Matrix6d) * 2 + 64) + 64;
+    const size_t places = static_cast<size_t>(p.loop.places);
+    m.loop = PlaceStore::bytes_needed(p.loop.places, p.loop.features, vocabulary_words) +
+             pixels * (2 * kFeatureBytesPerPixel +
+                       static_cast<size_t>(p.loop.queue_keyframes) * 2 * sizeof(float)) +
+             places * (kGraphBytesPerPlace + 2 * sizeof(KeyframePose));
+  }
   return m;
 }
 
-Status SlamSystem::init(const Params& params, ClockFn clock, MapSink* sink) {
+Status SlamSystem::init(const Params& params, ClockFn clock, MapSink* sink,
+                        const Vocabulary* vocabulary) {
   params_ = params;
   RGBDTAM_RETURN_IF_ERROR(tracking_.init(params));
+  loop_on_ = params.loop.enabled && vocabulary != nullptr;
+  if (loop_on_) {
+    constexpr int kCorrectionSlots = 2;
+    loop_queue_.allocate(params.loop.queue_keyframes, params.camera.width_px,
+                         params.camera.height_px);
+    corrections_.allocate(kCorrectionSlots, params.loop.places);
+    places_.allocate(params.loop.places, params.loop.features, vocabulary->words());
+    RGBDTAM_RETURN_IF_ERROR(loop_.init(params, vocabulary, &places_, &corrections_, clock));
+    tracking_.connect_loop(&loop_queue_, &corrections_, &places_, vocabulary);
+  }
   if (params.map_enabled) {
     queue_.allocate(params.map_queue_frames, params.camera.width_px, params.camera.height_px);
     RGBDTAM_RETURN_IF_ERROR(mapper_.init(params, params.camera, clock, sink));
@@ -35,9 +58,12 @@ Status SlamSystem::init(const Params& params, ClockFn clock, MapSink* sink) {
   return Status::ok();
 }
 
-Status SlamSystem::start(const ThreadPlacement& mapper) {
+Status SlamSystem::start(const ThreadPlacement& mapper, const ThreadPlacement& loop) {
+  if (loop_on_ && params_.loop.threaded) {
+    RGBDTAM_RETURN_IF_ERROR(loop_thread_.start(&loop_queue_, &loop_, loop, "rgbdtam-loop"));
+  }
   if (!params_.map_enabled || !params_.map_threaded) return Status::ok();
-  return thread_.start(&queue_, &mapper_, mapper);
+  return thread_.start(&queue_, &mapper_, mapper, "rgbdtam-mapper");
 }
 
 PoseEstimate SlamSystem::process(const SensorFrame& frame) {
@@ -46,22 +72,38 @@ PoseEstimate SlamSystem::process(const SensorFrame& frame) {
   return pose;
 }
 
+bool SlamSystem::keyframe_pose(uint32_t keyframe_id, SE3* T_w_k) {
+  if (tracking_.keyframe_pose(keyframe_id, T_w_k)) return true;
+  if (!loop_on_) return false;
+  std::lock_guard<std::mutex> lock(places_.mutex());
+  const int order = places_.order_of(keyframe_id);
+  if (order < 0) return false;
+  *T_w_k = places_.in_order(order).T_w_k;
+  return true;
+}
+
 void SlamSystem::map_pending() {
+  if (loop_on_) {
+    if (params_.loop.threaded) {
+      loop_thread_.notify();
+    } else {
+      drain(&loop_queue_, &loop_);
+    }
+  }
   if (!params_.map_enabled) return;
   if (params_.map_threaded) {
     thread_.notify();
   } else {
     // Deterministic replay: the mapper takes its step here, between frames.
-    while (MapperFrame* f = queue_.front()) {
-      mapper_.step(*f);
-      queue_.pop();
-    }
+    drain(&queue_, &mapper_);
   }
 }
 
 void SlamSystem::finish() {
-  if (!params_.map_enabled || finished_) return;
+  if (finished_) return;
   finished_ = true;
+  if (loop_on_ && params_.loop.threaded && loop_thread_.running()) loop_thread_.stop();
+  if (!params_.map_enabled) return;
   if (params_.map_threaded) {
     thread_.stop();
   } else {

@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include "rgbdtam/hal/file.hpp"
+#include "config_files.hpp"
 #include "rgbdtam/hal/tum_trajectory.hpp"
 
 namespace rgbdtam::testing {
@@ -14,11 +14,7 @@ ReplayOutcome replay_and_evaluate(const std::string& sequence, const std::string
   opt.map_sink = map_sink;
   opt.sequence = sequence.c_str();
   opt.progress = false;
-  char* text = nullptr;
-  if (!read_text_file(config.c_str(), 1 << 20, &text).is_ok()) return out;
-  const Status s = parse_params(text, config.c_str(), &opt.params);
-  delete[] text;
-  if (!s.is_ok()) return out;
+  if (!read_params_file(config.c_str(), &opt.params).is_ok()) return out;
   for (const char* o : overrides) {
     if (!set_param(o, "test", &opt.params).is_ok()) return out;
   }
@@ -36,6 +32,8 @@ ReplayOutcome replay_and_evaluate(const std::string& sequence, const std::string
   }
   out.report = evaluate_all(gt, job.estimates(), &stamps);
   out.report.nees = evaluate_frame_to_frame_nees(gt, job.estimates(), job.covariances());
+  out.final_report = evaluate_all(gt, job.final_estimates(), &stamps);
+  if (job.loop_enabled()) out.loop = job.loop_counters();
   out.counters = job.counters();
   out.tracking_median_ms = job.tracking_time().percentile_ms(0.5);
   out.ran = true;

@@ -12,6 +12,8 @@ struct ReplayOutcome {
   bool ran = false;
   TrackingCounters counters;
   EvaluationReport report;
+  EvaluationReport final_report;  // every tracked frame on its keyframe's final pose
+  LoopCounters loop;
   double tracking_median_ms = 0;
 };
 

@@ -18,6 +18,7 @@ int usage() {
                "  rgbdtam-stress drop-depth <in> <out> (--every <n> | --burst <length>/<period>)\n"
                "  rgbdtam-stress noise <in> <out> --config <file> --kind depth|colour|both\n"
                "                [--seed <n>]\n"
+               "  rgbdtam-stress there-and-back <in> <out> --config <file>\n"
                "  rgbdtam-stress pan <out> --peak-deg-s <deg/s> [--frames <n>] [--fps <hz>]\n");
   return 2;
 }
@@ -75,6 +76,8 @@ int main(int argc, char** argv) {
     ok = drop_depth_frames(positional[0], positional[1], every, burst, period);
   } else if (verb == "noise" && positional.size() == 2 && config != nullptr) {
     ok = noise_sequence(positional[0], positional[1], config, kind, seed);
+  } else if (verb == "there-and-back" && positional.size() == 2 && config != nullptr) {
+    ok = there_and_back(positional[0], positional[1], config);
   } else if (verb == "pan" && positional.size() == 1) {
     ok = pan_sequence(positional[0], peak, frames, fps);
   } else {

@@ -422,4 +422,43 @@ bool pan_sequence(const std::string& out, double peak_deg_s, int frames, double 
   return true;
 }
 
+bool there_and_back(const std::string& in, const std::string& out, const std::string& config) {
+  Params p;
+  if (!load_params(config, &p)) return false;
+  const double offset_s = static_cast<double>(p.sensor.depth_time_offset_ns) * 1e-9;
+  std::vector<std::string> lists[3];
+  const char* names[3] = {"rgb.txt", "depth.txt", "groundtruth.txt"};
+  for (int i = 0; i < 3; ++i) {
+    if (!read_lines(in + "/" + names[i], &lists[i])) return false;
+  }
+  double last = -1.0;
+  for (const std::string& l : lists[0]) {
+    if (is_data_line(l)) last = std::max(last, std::atof(l.c_str()));
+  }
+  if (last < 0.0) return fail("there-and-back: no colour frames in " + in);
+  if (!make_output(in, out)) return false;
+  for (int i = 0; i < 3; ++i) {
+    std::vector<std::string> data;
+    for (const std::string& l : lists[i]) {
+      if (is_data_line(l)) data.push_back(l);
+    }
+    std::vector<std::string> result = {"# " + std::string(names[i]) + " of " + in +
+                                       ", then backwards with mirrored stamps"};
+    result.insert(result.end(), data.begin(), data.end());
+    // Mirror about the last colour stamp (depth: shifted by twice the pairing offset).
+    const double centre = 2.0 * last + (i == 1 ? 2.0 * offset_s : 0.0);
+    for (auto it = data.rbegin(); it != data.rend(); ++it) {
+      const double t = std::atof(it->c_str());
+      const double mirrored = centre - t;
+      if (mirrored <= (i == 1 ? last + 2.0 * offset_s : last)) continue;
+      char stamp[32];
+      std::snprintf(stamp, sizeof(stamp), "%.6f", mirrored);
+      result.push_back(stamp + it->substr(it->find_first_of(" \t")));
+    }
+    if (!write_lines(out + "/" + names[i], result)) return false;
+  }
+  return copy_file(in, out, "calib.txt", false) && link_into(in, out, "rgb") &&
+         link_into(in, out, "depth");
+}
+
 }  // namespace rgbdtam::testing

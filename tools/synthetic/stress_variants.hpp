@@ -27,6 +27,11 @@ bool blur_sequence(const std::string& in, const std::string& out, const std::str
 // sensor's range. config gives the image size, the depth scale and the range.
 bool noise_sequence(const std::string& in, const std::string& out, const std::string& config,
                     const std::string& kind, unsigned seed);
+// The sequence played forwards and then backwards: the reversed frames get new, increasing
+// stamps mirrored about the last frame's, and their ground truth is the original's. The depth
+// stamps are mirrored about the colour-depth pairing offset of config, so that each reversed
+// colour frame pairs with the depth it paired with going forwards.
+bool there_and_back(const std::string& in, const std::string& out, const std::string& config);
 // A synthetic room seen by a camera panning at up to peak_deg_s, with exact ground truth and
 // its config as out/camera.conf.
 bool pan_sequence(const std::string& out, double peak_deg_s, int frames, double fps);

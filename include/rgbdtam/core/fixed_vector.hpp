@@ -22,6 +22,10 @@ class FixedVector {
     return true;
   }
   void clear() { size_ = 0; }
+  void truncate(int size) {
+    RGBDTAM_ASSERT(size >= 0 && size <= size_, "FixedVector::truncate can only shrink");
+    size_ = size;
+  }
   int size() const { return size_; }
   int capacity() const { return capacity_; }
   bool empty() const { return size_ == 0; }

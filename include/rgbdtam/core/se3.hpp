@@ -8,6 +8,7 @@
 namespace rgbdtam {
 
 using Vector6d = Eigen::Matrix<double, 6, 1>;
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
 using Matrix3d = Eigen::Matrix3d;
 using Vector3d = Eigen::Vector3d;
 
@@ -50,5 +51,8 @@ class SE3 {
   Eigen::Quaterniond q_;
   Vector3d t_;
 };
+
+// The adjoint of T for twists ordered (v, omega): T exp(xi) T^-1 = exp(Ad(T) xi).
+Matrix6d adjoint(const SE3& T);
 
 }  // namespace rgbdtam

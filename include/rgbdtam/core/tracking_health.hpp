@@ -43,6 +43,9 @@ struct HealthContext {
   double dt_s = 0.0;
 };
 
+// The camera could have made this motion in dt_s (dt_s > 0); false for NaN.
+bool within_motion_limits(const SE3& T_last_current, double dt_s, const HealthLimits& limits);
+
 uint32_t failed_health_checks(const TrackResult& r, const HealthContext& context,
                               const HealthLimits& limits);
 // The names of the failed checks, comma-separated, into buf (for STATUSTEXT and logs).

@@ -33,8 +33,9 @@ class FirmwareRuntime {
  public:
   static constexpr int kLinkQueueSlots = 16;
   // Allocates everything. The mapper always runs on its own thread here.
+  // vocabulary: for loop closure and relocalisation (null: off).
   Status init(const Params& params, const Board& board, ByteLink* link, GpioOutputs* gpio,
-              ClockFn clock);
+              ClockFn clock, const Vocabulary* vocabulary = nullptr);
   // Places the calling thread as the tracker and starts the mapper and link threads, as the
   // board says. on_frame() must then be called from this same thread.
   Status start();

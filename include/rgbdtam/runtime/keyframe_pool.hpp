@@ -14,6 +14,7 @@ class KeyframePool {
   Keyframe* acquire(const Keyframe* keep);
   int size() const { return used_; }
   Keyframe& at(int i) { return slots_[i]; }
+  const Keyframe& at(int i) const { return slots_[i]; }
   int capacity() const { return capacity_; }
   int recycled() const { return recycled_; }
 

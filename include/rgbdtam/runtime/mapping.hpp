@@ -9,11 +9,7 @@
 // dropped_frames; when it was a new keyframe, that keyframe keeps its sensor-only map and is
 // counted in dropped_keyframes.
 
-#include <atomic>
-#include <condition_variable>
 #include <memory>
-#include <mutex>
-#include <thread>
 
 #include "rgbdtam/core/multiview.hpp"
 #include "rgbdtam/core/tracker.hpp"
@@ -21,6 +17,7 @@
 #include "rgbdtam/runtime/params.hpp"
 #include "rgbdtam/runtime/spsc_ring.hpp"
 #include "rgbdtam/runtime/thread_placement.hpp"
+#include "rgbdtam/runtime/worker.hpp"
 
 namespace rgbdtam {
 
@@ -117,23 +114,6 @@ class MappingModule {
   LatencyStats per_keyframe_;
 };
 
-// Runs a MappingModule on its own thread, fed from a MapperQueue.
-class MappingThread {
- public:
-  ~MappingThread();
-  Status start(MapperQueue* queue, MappingModule* mapper, const ThreadPlacement& placement);
-  void notify();
-  // Drains what is queued, finishes the keyframe in progress, and joins.
-  void stop();
-
- private:
-  void run();
-  MapperQueue* queue_ = nullptr;
-  MappingModule* mapper_ = nullptr;
-  std::thread thread_;
-  std::mutex mutex_;
-  std::condition_variable wake_;
-  std::atomic<bool> stopping_{false};
-};
+using MappingThread = WorkerThread<MapperFrame, MappingModule>;
 
 }  // namespace rgbdtam

@@ -4,6 +4,8 @@
 
 #include <cstdint>
 
+#include "rgbdtam/core/fixed_vector.hpp"
+#include "rgbdtam/core/image.hpp"
 #include "rgbdtam/core/se3.hpp"
 
 namespace rgbdtam {
@@ -30,6 +32,9 @@ enum PoseFlags : uint32_t {
   kReset = 1u << 4,           // estimate restarted (jump); see reset_counter
   kNotInitialised = 1u << 5,  // no keyframe yet (waiting for a frame with depth)
   kKeyframeReused = 1u << 6,  // an earlier keyframe became the reference again (map reuse)
+  kRelocalised = 1u << 7,     // lost, then found again in the map (with kReset)
+  kLoopCorrected = 1u << 8,   // a loop closure moved the map (with kReset)
+  kSettling = 1u << 9,  // tracked, but withheld: too soon after a correction to compare poses
 };
 
 // Pipeline -> trajectory writer, link. One per input frame.
@@ -48,6 +53,31 @@ struct PoseEstimate {
   // Finest-level J^T W J of the tracker's keyframe-side perturbation, (v, omega); zero when
   // the pose is not valid.
   Eigen::Matrix<double, 6, 6> information;
+};
+
+// Tracker -> loop module, one per new keyframe. The slot owns its images.
+struct LoopKeyframe {
+  uint32_t keyframe_id = 0;
+  uint32_t reference_id = 0;  // the keyframe it was tracked against
+  bool after_reset = false;   // started by a restart: its pose is not related to the reference's
+  uint32_t corrections_adopted = 0;  // LoopCorrections the tracker had applied when it was made
+  int64_t timestamp_ns = 0;
+  SE3 T_w_k;
+  Matrix6d information = Matrix6d::Zero();  // of its pose relative to the reference, as tracked
+  ImageF gray;                              // level 0, undistorted, [0,1]
+  ImageF inverse_depth;                     // level 0 sensor inverse depth, 1/m
+};
+
+struct KeyframePose {
+  uint32_t keyframe_id = 0;
+  SE3 T_w_k;
+};
+
+// Loop module -> tracker, after a loop closure: every remembered keyframe's corrected pose,
+// sorted by id. The tracker adopts it between frames.
+struct LoopCorrection {
+  uint32_t query_id = 0, match_id = 0;  // the keyframes the loop joined
+  FixedVector<KeyframePose> poses;
 };
 
 }  // namespace rgbdtam

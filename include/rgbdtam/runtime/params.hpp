@@ -31,6 +31,25 @@ struct SensorModel {
   }
 };
 
+// Loop closure, relocalisation and map reuse (paper sec. VI).
+struct LoopParams {
+  bool enabled = true;
+  bool threaded = false;   // the loop module on its own thread (replay: synchronous)
+  bool relocalise = true;  // look lost frames up in the places (else a restart waits for a loop)
+  char vocabulary[128] = "";  // the vocabulary file, relative to the config file
+  int places = 1024;       // light records remembered (the oldest goes when full)
+  int features = 400;      // per keyframe
+  int queue_keyframes = 4;  // tracker -> loop module slots
+  // A place of the same unbroken stretch is a loop candidate only this long after it was seen:
+  // sooner, the tracker's own map still holds it.
+  double min_age_s = 20.0;
+  int min_inliers = 40;         // 3-D matches a rigid motion must explain
+  int consistent_queries = 2;   // consecutive keyframes that must find the same place
+  // A verified loop moves the map only when it disagrees with it by more than this.
+  double min_correction_m = 0.02;
+  double min_correction_rad = 1.0 * M_PI / 180.0;
+};
+
 struct Params {
   PinholeIntrinsics camera{517.3, 516.5, 318.6, 255.3, 640, 480};
   RadTanDistortion distortion;
@@ -57,9 +76,11 @@ struct Params {
   // 0.91 cm at 0.005 and 0.01, 0.88 at 0.02, 0.87 at 0.03 (0.88 without mapping).
   double map_min_baseline_ratio = 0.03;
   int map_seeds = 10000;  // edge pixels mapped per keyframe
+  LoopParams loop;
 };
 
-// Parses `key = value` lines (# comments). `source` names the file in errors.
+// Parses `key = value` lines (# comments). `source` names the file in errors; a file path
+// value (loop.vocabulary) is relative to source's folder.
 Status parse_params(const char* text, const char* source, Params* out);
 // Applies one `key=value` override, e.g. from the command line.
 Status set_param(const char* assignment, const char* source, Params* out);

@@ -16,25 +16,37 @@ struct MemoryNeed {
   size_t keyframe_pool = 0;  // map.keyframe_pool of them
   size_t mapper = 0;         // map.queue_frames frames, map.seeds seeds and their maps
   size_t images = 0;         // pyramids and scratch images, from camera.width x camera.height
-  size_t total() const { return keyframe_pool + mapper + images; }
+  size_t loop = 0;           // loop.places light records, their index and pose graph, the queue
+  size_t total() const { return keyframe_pool + mapper + images + loop; }
 };
-MemoryNeed memory_need(const Params& params);
+// vocabulary_words: of the vocabulary loop closure will use; 0 when it is off.
+MemoryNeed memory_need(const Params& params, int vocabulary_words = 0);
 
 class SlamSystem {
  public:
-  Status init(const Params& params, ClockFn clock, MapSink* sink);
-  // Starts the mapper's thread when map.threaded (after init, as every thread is).
-  Status start(const ThreadPlacement& mapper = ThreadPlacement());
+  // vocabulary: loop closure and relocalisation need one (loop.enabled); null turns them off.
+  Status init(const Params& params, ClockFn clock, MapSink* sink,
+              const Vocabulary* vocabulary = nullptr);
+  // Starts the mapper's and loop module's threads when map.threaded, loop.threaded (after
+  // init, as every thread is).
+  Status start(const ThreadPlacement& mapper = ThreadPlacement(),
+               const ThreadPlacement& loop = ThreadPlacement());
   // track() then map_pending().
   PoseEstimate process(const SensorFrame& frame);
   PoseEstimate track(const SensorFrame& frame) { return tracking_.process(frame); }
-  // Synchronous mode: the mapper's step for what the tracker queued. Threaded: a wake-up.
+  // Synchronous mode: the mapper's and loop module's steps for what the tracker queued.
+  // Threaded: a wake-up.
   void map_pending();
   // Lets the mapper finish what is queued and the keyframe in progress.
   void finish();
 
   const TrackingPipeline& tracking() const { return tracking_; }
   const MappingModule& mapper() const { return mapper_; }
+  const LoopModule& loop() const { return loop_; }
+  // A keyframe's pose as the map has it now (loop corrections included): from the tracker's
+  // pool, else from the places. Tracker's thread.
+  bool keyframe_pose(uint32_t keyframe_id, SE3* T_w_k);
+  bool loop_enabled() const { return loop_on_; }
 
  private:
   Params params_;
@@ -42,6 +54,12 @@ class SlamSystem {
   MapperQueue queue_;
   MappingModule mapper_;
   MappingThread thread_;
+  bool loop_on_ = false;
+  LoopQueue loop_queue_;
+  CorrectionQueue corrections_;
+  PlaceStore places_;
+  LoopModule loop_;
+  WorkerThread<LoopKeyframe, LoopModule> loop_thread_;
   bool finished_ = false;
 };
 

@@ -5,6 +5,7 @@
 // Thread: the caller's (replay: main thread; runtime: the tracking task).
 
 #include "rgbdtam/runtime/keyframe_pool.hpp"
+#include "rgbdtam/runtime/loop_closing.hpp"
 #include "rgbdtam/runtime/mapping.hpp"
 #include "rgbdtam/runtime/messages.hpp"
 #include "rgbdtam/runtime/params.hpp"
@@ -26,6 +27,10 @@ struct TrackingCounters {
   uint32_t retried = 0;               // frames whose first estimate failed a health check
   uint32_t recovered_by_guesses = 0;  // ... and passed from another initial guess
   uint32_t recovered_by_last_frame = 0;  // ... or against the last valid frame
+  uint32_t relocalised = 0;              // lost frames found again in the map
+  uint32_t loop_corrections = 0;         // loop closures adopted
+  uint32_t withheld = 0;                 // tracked frames not reported valid after a correction
+  uint32_t loop_dropped_keyframes = 0;   // the loop queue was full: not remembered as places
 };
 
 class TrackingPipeline {
@@ -34,10 +39,16 @@ class TrackingPipeline {
   PoseEstimate process(const SensorFrame& frame);
   // Every tracked frame is offered to the mapper through this queue (never waiting on it).
   void connect_mapper(MapperQueue* queue) { mapper_queue_ = queue; }
+  // New keyframes go to the loop module; its corrections come back; lost frames are looked up
+  // in the places. Init time.
+  void connect_loop(LoopQueue* keyframes, CorrectionQueue* corrections, PlaceStore* places,
+                    const Vocabulary* vocabulary);
 
   const TrackingCounters& counters() const { return counters_; }
   const KeyframePool& keyframes() const { return pool_; }
   const Params& params() const { return params_; }
+  // The keyframe's pose now (loop corrections included), if it is still in the pool.
+  bool keyframe_pose(uint32_t id, SE3* T_w_k) const;
 
  private:
   // A tracking result against one keyframe and the health checks it failed.
@@ -53,11 +64,17 @@ class TrackingPipeline {
   Attempt track_from_guesses(Keyframe* kf, int64_t t_ns);
   Attempt without_misfit_term(const Attempt& a, int64_t t_ns);
   uint32_t failed_checks(const TrackResult& r, const Keyframe& kf, int64_t t_ns) const;
+  bool relocalise(const SensorFrame& frame, PoseEstimate* out);
+  void adopt_corrections();
+  void apply_correction(const LoopCorrection& c);
+  void offer_to_loop(const Keyframe& kf, uint32_t reference_id, const PoseEstimate& pose,
+                     bool after_reset);
   SE3 predict_pose(int64_t t_ns) const;
   Keyframe* keyframe_from_last_valid_frame();
   void accept(const Attempt& a, const SensorFrame& frame, PoseEstimate* out);
   void on_lost(const SensorFrame& frame, uint32_t failed, PoseEstimate* out);
-  void start_keyframe(const SensorFrame& frame, const SE3& T_w_c, PoseEstimate* out);
+  void start_keyframe(const SensorFrame& frame, const SE3& T_w_c, PoseEstimate* out,
+                      bool after_reset = false);
   void offer_to_mapper(const PoseEstimate& pose, bool new_keyframe);
   void propagate_map(const SE3& T_w_c);
   void adopt_map(Keyframe* kf);
@@ -84,6 +101,15 @@ class TrackingPipeline {
   Keyframe* reference_ = nullptr;
   Keyframe* fallback_ = nullptr;  // built from the last valid frame while tracking fails
   MapperQueue* mapper_queue_ = nullptr;
+  LoopQueue* loop_queue_ = nullptr;
+  CorrectionQueue* corrections_ = nullptr;
+  PlaceStore* places_ = nullptr;
+  const Vocabulary* vocabulary_ = nullptr;
+  PlaceRecognizer relocaliser_;
+  VerificationLimits relocalisation_limits_;
+  uint32_t corrections_adopted_ = 0;
+  uint32_t pending_flags_ = 0;  // for the next output: a correction moved the map
+  int64_t withhold_until_ns_ = 0;  // poses up to this time are tracked but not reported valid
   uint32_t next_keyframe_id_ = 0;
   // The last valid pose and the camera's twist (v, omega per second) before it.
   SE3 T_w_last_;

@@ -1,0 +1,99 @@
+#pragma once
+// The light keyframe store that loop closure and relocalisation share, and the recogniser
+// both use to describe a view and verify a match.
+//
+// Every keyframe leaves a light record (pose, features with 3-D points, bag-of-words vector)
+// that outlives its dense slot in the tracker's pool, so the map remembers far more places than
+// the pool holds. Records live in slots of fixed capacity; a handle (slot, generation) goes
+// stale when its slot is reused. Policy when full: the oldest record is evicted (counted), as
+// a ring: a robot that runs for hours keeps the places of its last `loop.places` keyframes.
+// Threads: the loop module writes, the tracker reads (relocalisation); both under mutex().
+
+#include <mutex>
+
+#include "rgbdtam/core/place_database.hpp"
+#include "rgbdtam/core/rigid_alignment.hpp"
+#include "rgbdtam/runtime/params.hpp"
+
+namespace rgbdtam {
+
+struct PlaceRecord {
+  uint32_t keyframe_id = 0;
+  uint32_t generation = 0;
+  uint32_t segment = 0;  // stretches between restarts: poses within one are related
+  int64_t timestamp_ns = 0;
+  SE3 T_w_k;
+  uint32_t reference_id = 0;
+  bool after_reset = false;
+  Matrix6d information = Matrix6d::Zero();  // relative to the reference, keyframe-side (v, omega)
+  FixedVector<Feature> features;
+  BowVector bow;
+};
+
+struct PlaceHandle {
+  int slot = -1;
+  uint32_t generation = 0;
+};
+
+class PlaceStore {
+ public:
+  void allocate(int capacity, int features_per_place, int words);
+  std::mutex& mutex() { return mutex_; }
+
+  // Under the lock. The record the next keyframe goes to, the oldest evicted when full; fill
+  // it, then commit() indexes it.
+  PlaceRecord* begin_insert();
+  void commit();
+  int size() const { return size_; }
+  int capacity() const { return capacity_; }
+  uint32_t evicted() const { return evicted_; }
+  // Oldest first.
+  PlaceRecord& in_order(int i) { return records_[slot_of(i)]; }
+  const PlaceRecord& in_order(int i) const { return records_[slot_of(i)]; }
+  // The order index of a keyframe's record, or -1 when it is not (or no longer) remembered.
+  int order_of(uint32_t keyframe_id) const;
+  const PlaceRecord& at_slot(int slot) const { return records_[slot]; }
+  PlaceHandle handle(int order) const;
+  const PlaceRecord* get(const PlaceHandle& h) const;
+  PlaceDatabase& database() { return database_; }
+
+  // Bytes that allocate() takes, for the memory budget.
+  static size_t bytes_needed(int capacity, int features_per_place, int words);
+
+ private:
+  int slot_of(int order) const { return (first_ + order) % capacity_; }
+
+  std::mutex mutex_;
+  std::unique_ptr<PlaceRecord[]> records_;
+  PlaceDatabase database_;
+  int capacity_ = 0, size_ = 0, first_ = 0;
+  uint32_t evicted_ = 0;
+};
+
+// What a place match must show to be believed.
+struct VerificationLimits {
+  int min_inliers = 40;
+  double inverse_depth_sigma = 0.01;  // the sensor's, for the inlier threshold
+};
+
+// Describes one view (features, bag of words) and verifies it against remembered places.
+class PlaceRecognizer {
+ public:
+  void allocate(const Params& params);
+  void describe(const ImageF& gray, const ImageF& inverse_depth, const PinholeIntrinsics& k,
+                const Vocabulary& vocabulary);
+  const FixedVector<Feature>& features() const { return features_; }
+  const BowVector& bow() const { return bow_; }
+  // Descriptor matches lifted to 3-D, RANSAC with Horn's closed form: T_b_a is the place's
+  // keyframe from this view. inliers = 0 when it does not fit.
+  RigidRansacResult verify(const PlaceRecord& place, const VerificationLimits& limits);
+
+ private:
+  FeatureExtractor extractor_;
+  FixedVector<Feature> features_;
+  BowVector bow_;
+  std::unique_ptr<PointPair[]> pairs_;
+  std::unique_ptr<uint8_t[]> inlier_;
+};
+
+}  // namespace rgbdtam

@@ -1,0 +1,75 @@
+#pragma once
+// One module skeleton: a module is step(const Item&) plus finish(), fed from a bounded SPSC ring.
+// The same module code runs synchronously (deterministic replay drains the ring between
+// frames) or on its own thread, placed from the board's task table.
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <mutex>
+#include <thread>
+
+#include "rgbdtam/runtime/spsc_ring.hpp"
+#include "rgbdtam/runtime/thread_placement.hpp"
+
+namespace rgbdtam {
+
+// Synchronous mode: every queued item, in order, on the caller's thread.
+template <typename Item, typename Module>
+void drain(SpscRing<Item>* queue, Module* module) {
+  while (Item* item = queue->front()) {
+    module->step(*item);
+    queue->pop();
+  }
+}
+
+template <typename Item, typename Module>
+class WorkerThread {
+ public:
+  ~WorkerThread() {
+    if (thread_.joinable()) stop();
+  }
+  Status start(SpscRing<Item>* queue, Module* module, const ThreadPlacement& placement,
+               const char* name) {
+    queue_ = queue;
+    module_ = module;
+    stopping_ = false;
+    thread_ = std::thread([this] { run(); });
+    return place_thread(thread_, placement, name);
+  }
+  void notify() { wake_.notify_one(); }
+  // Steps through what is queued, finishes the module, and joins.
+  void stop() {
+    stopping_.store(true, std::memory_order_release);
+    wake_.notify_one();
+    thread_.join();
+  }
+  bool running() const { return thread_.joinable(); }
+
+ private:
+  void run() {
+    for (;;) {
+      if (Item* item = queue_->front()) {
+        module_->step(*item);
+        queue_->pop();
+        continue;
+      }
+      if (stopping_.load(std::memory_order_acquire)) break;
+      std::unique_lock<std::mutex> lock(mutex_);
+      // The timeout covers a notify that lands between the check above and this wait.
+      wake_.wait_for(lock, std::chrono::milliseconds(5), [this] {
+        return stopping_.load(std::memory_order_acquire) || queue_->front() != nullptr;
+      });
+    }
+    module_->finish();
+  }
+
+  SpscRing<Item>* queue_ = nullptr;
+  Module* module_ = nullptr;
+  std::thread thread_;
+  std::mutex mutex_;
+  std::condition_variable wake_;
+  std::atomic<bool> stopping_{false};
+};
+
+}  // namespace rgbdtam

@@ -1,0 +1,20 @@
+#pragma once
+// Reading the files a run is configured by: the parameter file (its relative paths resolved
+// against its own folder) and the place-recognition vocabulary it names.
+
+#include "rgbdtam/core/vocabulary.hpp"
+#include <memory>
+
+#include "rgbdtam/runtime/params.hpp"
+
+namespace rgbdtam {
+
+Status read_params_file(const char* path, Params* p);
+// Loads params.loop.vocabulary when loop.enabled; true when one was. A config that names none
+// runs without loop closure, with a warning; one that cannot be read is an *error.
+bool load_vocabulary(const Params& params, Vocabulary* out, Status* error);
+// The bytes of a file, sized from the file (init time).
+Status read_binary_file(const char* path, size_t max_bytes, std::unique_ptr<uint8_t[]>* data,
+                        size_t* size);
+
+}  // namespace rgbdtam
