@@ -39,6 +39,7 @@ Status ReplayJob::init(const ReplayOptions& options) {
                                               &memory_needed_bytes_));
   RGBDTAM_RETURN_IF_ERROR(
       system_.init(p, monotonic_ns, options.map_sink, loop ? &vocabulary_ : nullptr));
+  system_.set_loop_observer(options.loop_observer);
   RGBDTAM_RETURN_IF_ERROR(system_.start());
   if (options.trajectory_path != nullptr) {
     RGBDTAM_RETURN_IF_ERROR(writer_.open(options.trajectory_path));
@@ -80,8 +81,8 @@ bool ReplayJob::step() {
   if ((last_pose_.flags & (kPoseValid | kSettling)) != 0) {
     SE3 T_w_k;
     const bool found = system_.keyframe_pose(last_pose_.keyframe_id, &T_w_k);
-    on_keyframes_.push_back({t_s, last_pose_.keyframe_id,
-                             found ? T_w_k.inverse() * last_pose_.T_w_c : last_pose_.T_w_c, found});
+    on_keyframes_.push_back(
+        {t_s, last_pose_.keyframe_id, last_pose_.T_w_c, T_w_k.inverse() * last_pose_.T_w_c, found});
   }
   const int64_t t3 = monotonic_ns();
   tracking_ms_.add(t2 - t1);
@@ -101,9 +102,9 @@ Status ReplayJob::finish() {
   final_estimates_.clear();
   for (const OnKeyframe& f : on_keyframes_) {
     SE3 T_w_k;
-    const bool placed = f.relative && system_.keyframe_pose(f.keyframe_id, &T_w_k);
+    const bool placed = f.on_keyframe && system_.keyframe_pose(f.keyframe_id, &T_w_k);
     // A keyframe the map forgot: the frame keeps the pose it was reported with.
-    final_estimates_.push_back({f.t_s, placed ? T_w_k * f.T_k_c : f.T_k_c});
+    final_estimates_.push_back({f.t_s, placed ? T_w_k * f.T_k_c : f.T_w_c});
   }
   if (options_.final_trajectory_path != nullptr && closed.is_ok()) {
     TrajectoryWriter final_writer;

@@ -21,6 +21,7 @@ struct ReplayOptions {
   // has it (after loop closures), as offline SLAM evaluations report.
   const char* final_trajectory_path = nullptr;
   MapSink* map_sink = nullptr;            // optional: receives each keyframe's map
+  LoopObserver* loop_observer = nullptr;  // optional: every verified place match
   Params params;
   bool progress = true;
   int max_frames = 0;  // 0 = all
@@ -39,6 +40,7 @@ class ReplayJob {
   // The summary and the evaluation as one JSON object, for tools/bench.sh.
   void print_json(const EvaluationReport& report) const;
 
+  const PoseEstimate& last_pose() const { return last_pose_; }
   const std::vector<StampedPose>& estimates() const { return estimates_; }
   // After finish(): every tracked frame (withheld ones too) on its keyframe's final pose.
   const std::vector<StampedPose>& final_estimates() const { return final_estimates_; }
@@ -63,8 +65,9 @@ class ReplayJob {
   struct OnKeyframe {
     double t_s;
     uint32_t keyframe_id;
-    SE3 T_k_c;  // or T_w_c when the keyframe was not found
-    bool relative;
+    SE3 T_w_c;  // as reported
+    SE3 T_k_c;  // on its keyframe, when the keyframe was found
+    bool on_keyframe;
   };
   std::vector<OnKeyframe> on_keyframes_;  // the same
   std::vector<StampedPose> final_estimates_;

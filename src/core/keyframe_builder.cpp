@@ -104,8 +104,7 @@ void KeyframeBuilder::build(const FramePyramid& frame, uint32_t id, int64_t time
   kf->id = id;
   kf->timestamp_ns = timestamp_ns;
   kf->T_w_k = T_w_k;
-  kf->active_photometric.store(0, std::memory_order_relaxed);
-  kf->map_ready.store(false, std::memory_order_relaxed);
+  kf->active_photometric = 0;
   prepare(frame);
   for (int l = 0; l < kPyramidLevels; ++l) {
     select_photometric(frame, photometric_depth != nullptr ? *photometric_depth : frame, l,

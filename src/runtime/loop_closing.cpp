@@ -86,32 +86,42 @@ bool LoopModule::detect(const LoopKeyframe& query, Found* found) {
   const CandidateFilter filter{store_, segment_, query.timestamp_ns,
                                static_cast<int64_t>(params_.loop.min_age_s * 1e9)};
   PlaceMatch matches[kCandidates];
+  PlaceMatchEvent events[kCandidates];
+  int verified = 0;
   // Only this thread writes the store, so it reads without the lock.
   const int n = store_->database().query(recognizer_.bow(), is_loop_candidate, &filter, matches,
                                          kCandidates);
-  bool verified = false;
   for (int i = 0; i < n && matches[i].score >= kMinRelativeScore * matches[0].score; ++i) {
     const PlaceRecord& place = store_->at_slot(matches[i].slot);
     ++counters_.candidates;
     const RigidRansacResult fit = recognizer_.verify(place, limits_);
-    if (fit.inliers == 0 || (verified && fit.inliers <= found->fit.inliers)) continue;
-    verified = true;
+    if (fit.inliers == 0) continue;
+    events[verified++] = {query.keyframe_id, place.keyframe_id,    query.timestamp_ns,
+                          place.timestamp_ns, fit.T_b_a, fit.inliers, false};
+    if (verified > 1 && fit.inliers <= found->fit.inliers) continue;
     found->place = {matches[i].slot, place.generation};
     found->keyframe_id = place.keyframe_id;
     found->T_place_query = fit.T_b_a;
     found->fit = fit;
   }
-  if (!verified) {
+  bool loop = false;
+  if (verified == 0) {
     consistent_ = 0;
-    return false;
+  } else {
+    ++counters_.verified;
+    const int order = store_->order_of(found->keyframe_id);
+    const int last = store_->order_of(last_match_id_);
+    const bool same_place =
+        consistent_ > 0 && last >= 0 && std::abs(order - last) <= kConsistentOrderGap;
+    consistent_ = same_place ? consistent_ + 1 : 1;
+    last_match_id_ = found->keyframe_id;
+    loop = consistent_ >= params_.loop.consistent_queries;
   }
-  ++counters_.verified;
-  const int order = store_->order_of(found->keyframe_id);
-  const int last = store_->order_of(last_match_id_);
-  const bool same_place = consistent_ > 0 && last >= 0 && std::abs(order - last) <= kConsistentOrderGap;
-  consistent_ = same_place ? consistent_ + 1 : 1;
-  last_match_id_ = found->keyframe_id;
-  return consistent_ >= params_.loop.consistent_queries;
+  for (int i = 0; observer_ != nullptr && i < verified; ++i) {
+    events[i].loop = loop && events[i].place_id == found->keyframe_id;
+    observer_->on_verified(events[i]);
+  }
+  return loop;
 }
 
 void LoopModule::remember(const LoopKeyframe& keyframe, const SE3& T_w_k) {

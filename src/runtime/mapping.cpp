@@ -37,8 +37,9 @@ void MapperQueue::allocate(int slots, int width, int height) {
 }
 
 Status MappingModule::init(const Params& params, const PinholeIntrinsics& k, ClockFn clock,
-                           MapSink* sink) {
+                           MapSink* sink, KeyframePool* keyframes) {
   params_ = params;
+  keyframes_ = keyframes;
   clock_ = clock;
   sink_ = sink;
   mv_.max_seeds = params.map_seeds;
@@ -57,7 +58,9 @@ Status MappingModule::init(const Params& params, const PinholeIntrinsics& k, Clo
 }
 
 void MappingModule::start(Job* job, const MapperFrame& frame) {
-  job->keyframe = frame.new_keyframe;
+  job->handle = frame.new_keyframe;
+  job->keyframe = keyframes_->get(frame.new_keyframe);  // pinned: it stays until unpinned
+  RGBDTAM_ASSERT(job->keyframe != nullptr, "the tracker recycled a pinned keyframe");
   copy_image(frame.gray, &job->gray);
   copy_image(frame.inverse_depth, &job->sensor_inverse_depth);
   std::memcpy(job->edges.data(), frame.edges.data(), static_cast<size_t>(frame.edges.size()));
@@ -114,7 +117,7 @@ void MappingModule::step(const MapperFrame& frame) {
       if (job.keyframe != nullptr) finalize(&job);
     }
   }
-  if (frame.new_keyframe != nullptr) {
+  if (frame.new_keyframe.slot >= 0) {
     // A free slot, or else the oldest open keyframe is finished first.
     Job* slot = nullptr;
     for (Job& job : jobs_) {
@@ -201,8 +204,8 @@ void MappingModule::finalize(Job* job) {
         {(p.x - static_cast<float>(k.cx_px)) / static_cast<float>(k.fx_px) * z,
          (p.y - static_cast<float>(k.cy_px)) / static_cast<float>(k.fy_px) * z, z});
   }
-  kf->map_ready.store(true, std::memory_order_release);
-  kf->being_mapped.store(false, std::memory_order_release);
+  keyframes_->publish_map(job->handle);
+  keyframes_->unpin(job->handle);
   if (sink_ != nullptr) {
     sink_->on_keyframe_map(kf->timestamp_ns, job->seeds.T_w_k(), fused_.intrinsics(0), pixels_);
   }

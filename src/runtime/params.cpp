@@ -157,6 +157,11 @@ const KeySpec kSpecs[] = {
      RGBDTAM_FIELD(loop.min_correction_m), false},
     {"loop.min_correction_angle", ValueType::kDegreesAsRadians, 0, 180, "deg",
      "... or beyond this angle", RGBDTAM_FIELD(loop.min_correction_rad), false},
+    {"loop.max_reported_jump", ValueType::kReal, 0, 10, "m",
+     "a correction moving the camera further withholds poses for health.reset_after_lost_ms",
+     RGBDTAM_FIELD(loop.max_reported_jump_m), false},
+    {"loop.max_reported_jump_angle", ValueType::kDegreesAsRadians, 0, 180, "deg",
+     "... or turning it further", RGBDTAM_FIELD(loop.max_reported_jump_rad), false},
     // tracker.lost_sigma_ratio: now health.max_sigma_ratio.
     // tracker.lost_frames_before_reset: now health.reset_after_lost_ms.
     {"health.min_residuals", ValueType::kInt, 6, 1e6, "",

@@ -39,7 +39,7 @@ MemoryNeed memory_need(const Params& p, int vocabulary_words) {
 Status SlamSystem::init(const Params& params, ClockFn clock, MapSink* sink,
                         const Vocabulary* vocabulary) {
   params_ = params;
-  RGBDTAM_RETURN_IF_ERROR(tracking_.init(params));
+  RGBDTAM_RETURN_IF_ERROR(tracking_.init(params, &keyframes_));
   loop_on_ = params.loop.enabled && vocabulary != nullptr;
   if (loop_on_) {
     constexpr int kCorrectionSlots = 2;
@@ -52,7 +52,7 @@ Status SlamSystem::init(const Params& params, ClockFn clock, MapSink* sink,
   }
   if (params.map_enabled) {
     queue_.allocate(params.map_queue_frames, params.camera.width_px, params.camera.height_px);
-    RGBDTAM_RETURN_IF_ERROR(mapper_.init(params, params.camera, clock, sink));
+    RGBDTAM_RETURN_IF_ERROR(mapper_.init(params, params.camera, clock, sink, &keyframes_));
     tracking_.connect_mapper(&queue_);
   }
   return Status::ok();

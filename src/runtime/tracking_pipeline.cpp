@@ -17,8 +17,9 @@ constexpr int kMaxGuesses = 4 + 6 * kMaxGuessTurns;
 constexpr int64_t kMaxVelocityGapNs = 200'000'000;
 }  // namespace
 
-Status TrackingPipeline::init(const Params& params) {
+Status TrackingPipeline::init(const Params& params, KeyframePool* keyframes) {
   params_ = params;
+  pool_ = keyframes;
   params_.tracker.inverse_depth_sigma = params.sensor.inverse_depth_sigma();
   params_.tracker.inverse_depth_sigma_floor = params.sensor.inverse_depth_quantum_sigma();
   undistorter_.init(params_.camera, params_.distortion);
@@ -29,7 +30,7 @@ Status TrackingPipeline::init(const Params& params) {
   depth_undistorted_.allocate(params_.camera.width_px, params_.camera.height_px);
   builder_.allocate(params_.camera, params_.tracker);
   const int map_points = params_.map_enabled ? params_.map_seeds : 0;
-  pool_.allocate(params_.keyframe_pool_size, builder_, map_points);
+  pool_->allocate(params_.keyframe_pool_size, builder_, map_points);
   for (LocalMap& m : local_maps_) m.points.reserve_once(map_points);
   Keyframe model;
   builder_.allocate_keyframe(&model);
@@ -124,7 +125,7 @@ Keyframe* TrackingPipeline::keyframe_from_last_valid_frame() {
   if (!last_valid_frame_kept_ || reference_->timestamp_ns == last_ns_) return nullptr;
   const FramePyramid& last = frames_[1 - current_];
   if (!last.has_depth()) return nullptr;
-  fallback_ = pool_.acquire(reference_);
+  fallback_ = pool_->acquire(reference_);
   // Sensor depth only: the mapper never saw this frame's images as a keyframe's.
   builder_.build(last, next_keyframe_id_++, last_ns_, T_w_last_, fallback_);
   ++counters_.keyframes;
@@ -146,8 +147,8 @@ bool TrackingPipeline::reuse_keyframe(const Attempt& current, int64_t t_ns, Pose
   while (count < wanted) {
     Keyframe* nearest = nullptr;
     double nearest_distance = 0.0;
-    for (int i = 0; i < pool_.size(); ++i) {
-      Keyframe* kf = &pool_.at(i);
+    for (int i = 0; i < pool_->size(); ++i) {
+      Keyframe* kf = &pool_->at(i);
       if (kf == reference_ || std::find(candidates, candidates + count, kf) != candidates + count) {
         continue;
       }
@@ -197,7 +198,7 @@ bool TrackingPipeline::reuse_keyframe(const Attempt& current, int64_t t_ns, Pose
 void TrackingPipeline::start_keyframe(const SensorFrame& frame, const SE3& T_w_c,
                                       PoseEstimate* out, bool after_reset) {
   const uint32_t reference_id = reference_ != nullptr ? reference_->id : next_keyframe_id_;
-  Keyframe* kf = pool_.acquire(reference_);
+  Keyframe* kf = pool_->acquire(reference_);
   // With mapping, the new keyframe starts with the previous one's map where its sensor is
   // blind (the authors' "local map"), until its own multi-view map replaces it.
   const bool propagate = mapper_queue_ != nullptr;
@@ -267,8 +268,8 @@ bool TrackingPipeline::relocalise(const SensorFrame& frame, PoseEstimate* out) {
     return false;
   }
   Keyframe* kf = nullptr;
-  for (int i = 0; i < pool_.size() && kf == nullptr; ++i) {
-    if (pool_.at(i).id == place_id) kf = &pool_.at(i);
+  for (int i = 0; i < pool_->size() && kf == nullptr; ++i) {
+    if (pool_->at(i).id == place_id) kf = &pool_->at(i);
   }
   if (kf != nullptr) {
     // Refined directly against the place's keyframe; it must pass every health check.
@@ -297,9 +298,9 @@ bool TrackingPipeline::relocalise(const SensorFrame& frame, PoseEstimate* out) {
 }
 
 bool TrackingPipeline::keyframe_pose(uint32_t id, SE3* T_w_k) const {
-  for (int i = 0; i < pool_.size(); ++i) {
-    if (pool_.at(i).id == id) {
-      *T_w_k = pool_.at(i).T_w_k;
+  for (int i = 0; i < pool_->size(); ++i) {
+    if (pool_->at(i).id == id) {
+      *T_w_k = pool_->at(i).T_w_k;
       return true;
     }
   }
@@ -329,8 +330,8 @@ void TrackingPipeline::apply_correction(const LoopCorrection& c) {
   bool have_newest = false;
   SE3 reference_delta;
   bool have_reference = false;
-  for (int i = 0; i < pool_.size(); ++i) {
-    Keyframe& kf = pool_.at(i);
+  for (int i = 0; i < pool_->size(); ++i) {
+    Keyframe& kf = pool_->at(i);
     const KeyframePose* p = corrected(kf.id);
     if (p == nullptr) continue;
     const SE3 delta = p->T_w_k * kf.T_w_k.inverse();
@@ -340,16 +341,21 @@ void TrackingPipeline::apply_correction(const LoopCorrection& c) {
   }
   if (!have_newest) return;
   const uint32_t last_known = c.poses[c.poses.size() - 1].keyframe_id;
-  for (int i = 0; i < pool_.size(); ++i) {
-    Keyframe& kf = pool_.at(i);
+  for (int i = 0; i < pool_->size(); ++i) {
+    Keyframe& kf = pool_->at(i);
     if (kf.id > last_known) kf.T_w_k = newest_delta * kf.T_w_k;
     if (&kf == reference_ && kf.id > last_known) reference_delta = newest_delta, have_reference = true;
   }
   for (LocalMap& m : local_maps_) m.T_w_k = newest_delta * m.T_w_k;
+  const SE3 before = T_w_last_;
   T_w_last_ = (have_reference ? reference_delta : newest_delta) * T_w_last_;
-  // Poses either side of the jump are not comparable: as after a restart, none is reported
-  // over the window in which a consumer differences poses.
-  withhold_until_ns_ = last_ns_ + params_.reset_after_lost_ns;
+  // Poses either side of a large jump are not comparable: as after a restart, none is
+  // reported over the window in which a consumer differences poses.
+  const SE3 jump = before.inverse() * T_w_last_;
+  if (jump.translation().norm() > params_.loop.max_reported_jump_m ||
+      so3_log(jump.quaternion()).norm() > params_.loop.max_reported_jump_rad) {
+    withhold_until_ns_ = last_ns_ + params_.reset_after_lost_ns;
+  }
   ++corrections_adopted_;
   ++reset_counter_;
   ++counters_.loop_corrections;
@@ -388,7 +394,7 @@ void TrackingPipeline::accept(const Attempt& a, const SensorFrame& frame, PoseEs
   // scene loses the baseline its multi-view depth needs (synthetic wall at 6 m: 2-5 % depth
   // error instead of 0.2-0.9 %, and tracking on that map drifts).
   const bool moved = r.parallax > params_.tracker.keyframe_parallax &&
-                     !a.kf->being_mapped.load(std::memory_order_acquire);
+                     !pool_->pinned(a.kf);
   const bool new_view = r.overlap < params_.tracker.keyframe_overlap || moved;
   if (new_view && !reuse_keyframe(a, frame.timestamp_ns, out) && this->frame().has_depth()) {
     start_keyframe(frame, out->T_w_c, out);
@@ -467,7 +473,7 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
   // Every finished map, not only the reference's: the local maps that fill a new keyframe's
   // sensor-blind pixels must be the newest, and the mapper may finish a keyframe after the
   // tracker has moved on from it.
-  for (int i = 0; i < pool_.size(); ++i) adopt_map(&pool_.at(i));
+  for (int i = 0; i < pool_->size(); ++i) adopt_map(&pool_->at(i));
   adopt_corrections();
   const int64_t t = frame.timestamp_ns;
   Attempt a = track_against(reference_, predict_pose(t), t);
@@ -509,7 +515,7 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
 }
 
 void TrackingPipeline::adopt_map(Keyframe* kf) {
-  if (!kf->adopt_map()) return;
+  if (!pool_->adopt_map(kf)) return;
   LocalMap& m = local_maps_[next_local_map_];
   next_local_map_ = (next_local_map_ + 1) % 2;
   m.T_w_k = kf->T_w_k;
@@ -550,13 +556,13 @@ void TrackingPipeline::offer_to_mapper(const PoseEstimate& pose, bool new_keyfra
   slot->timestamp_ns = pose.timestamp_ns;
   slot->T_w_c = pose.T_w_c;
   std::memcpy(slot->gray.data(), frame().gray(0).data(), sizeof(float) * slot->gray.size());
-  slot->new_keyframe = nullptr;
+  slot->new_keyframe = KeyframeHandle();
   if (new_keyframe) {
     std::memcpy(slot->inverse_depth.data(), frame().inverse_depth(0).data(),
                 sizeof(float) * slot->inverse_depth.size());
     std::memcpy(slot->edges.data(), builder_.edges().data(), slot->edges.size());
-    reference_->being_mapped.store(true, std::memory_order_release);
-    slot->new_keyframe = reference_;
+    slot->new_keyframe = pool_->handle(reference_);
+    pool_->pin(slot->new_keyframe);
   }
   mapper_queue_->publish();
 }

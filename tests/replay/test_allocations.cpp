@@ -10,6 +10,7 @@
 #include <memory>
 #include <new>
 
+#include "config_files.hpp"
 #include "fake_v4l2.hpp"
 #include "record_job.hpp"
 #include "replay_job.hpp"
@@ -147,19 +148,25 @@ TEST(Allocations, InitAllocatesWhatTheMemoryBudgetIsToldItNeeds) {
   ASSERT_TRUE(read_text_file(config.c_str(), 1 << 20, &text).is_ok());
   ASSERT_TRUE(parse_params(text, config.c_str(), &base).is_ok());
   delete[] text;
+  Vocabulary vocabulary;
+  Status error;
+  ASSERT_TRUE(load_vocabulary(base, &vocabulary, &error)) << error.message();
   for (const char* change : {"", "map.keyframe_pool=96", "map.seeds=30000", "map.queue_frames=12",
-                             "map.enabled=false", "tracker.photometric_points=20000"}) {
+                             "map.enabled=false", "tracker.photometric_points=20000",
+                             "loop.places=4096", "loop.features=1000", "loop.enabled=false"}) {
     Params p = base;
     if (*change != '\0') {
       ASSERT_TRUE(set_param(change, "test", &p).is_ok());
     }
+    const Vocabulary* voc = p.loop.enabled ? &vocabulary : nullptr;
     auto system = std::make_unique<SlamSystem>();
     g_bytes = 0;
     g_armed = true;
-    ASSERT_TRUE(system->init(p, nullptr, nullptr).is_ok());
+    ASSERT_TRUE(system->init(p, nullptr, nullptr, voc).is_ok());
     g_armed = false;
     const double allocated = static_cast<double>(g_bytes.load());
-    const double needed = static_cast<double>(memory_need(p).total());
+    const double needed =
+        static_cast<double>(memory_need(p, voc != nullptr ? voc->words() : 0).total());
     std::printf("%-32s init allocated %7.1f MB, memory_need %7.1f MB\n",
                 *change != '\0' ? change : "(tum_fr1.conf)", allocated / 1e6, needed / 1e6);
     EXPECT_GE(needed, allocated * 0.98) << change;
@@ -203,6 +210,25 @@ TEST(Allocations, NoneWhileRecoveringFromAKidnappedFrame) {
       "kidnapped frame: %u frames, %u retried (%u recovered from guesses, %u against the "
       "last valid frame), %u lost; %ld allocations after init\n",
       c.frames, c.retried, c.recovered_by_guesses, c.recovered_by_last_frame, c.lost, calls);
+}
+
+TEST(Allocations, NoneWhileRelocalisingOrClosingALoop) {
+  // fr1_xyz with 100 frames cut: relocalised at once; or, without relocalisation, restarted and
+  // joined to the map by a loop closure (pose graph, correction adopted, poses withheld).
+  const std::string seq = testing::full_fr1_xyz();
+  if (seq.empty()) GTEST_SKIP() << "full fr1_xyz not present on this machine";
+  const std::string dir = testing::make_temp_dir("alloc_loop");
+  ASSERT_TRUE(testing::cut_frames(seq, dir + "/cut", 300, 100));
+  for (const char* mode : {"loop.relocalise=true", "loop.relocalise=false"}) {
+    ReplayJob job;
+    const long calls = count_allocations_after_init({mode}, &job, dir + "/cut");
+    const TrackingCounters& c = job.counters();
+    EXPECT_GE(c.relocalised + c.loop_corrections, 1u) << mode << ": nothing exercised";
+    EXPECT_EQ(calls, 0) << mode << ": " << g_bytes.load() << " bytes allocated after init";
+    std::printf("%s: %u relocalised, %u loop corrections, %u withheld; %ld allocations after "
+                "init\n",
+                mode, c.relocalised, c.loop_corrections, c.withheld, calls);
+  }
 }
 
 TEST(Allocations, NoneInTheFirmwareRuntimeAcrossItsThreads) {

@@ -33,8 +33,9 @@ Verdicts track_and_judge(const testing::SyntheticScene& scene,
                          const std::vector<testing::SyntheticFrame>& frames,
                          const std::vector<SE3>& truth, double fps,
                          std::vector<PoseEstimate>* poses = nullptr) {
+  KeyframePool keyframes;
   TrackingPipeline pipeline;
-  EXPECT_TRUE(pipeline.init(synthetic_params(scene)).is_ok());
+  EXPECT_TRUE(pipeline.init(synthetic_params(scene), &keyframes).is_ok());
   Verdicts v;
   for (size_t i = 0; i < frames.size(); ++i) {
     const PoseEstimate pose =

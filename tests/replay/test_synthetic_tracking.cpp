@@ -35,8 +35,9 @@ constexpr double kFps = 10.0;
 
 PathError track_synthetic(const char* residuals, int frames, double fps) {
   testing::SyntheticScene scene;
+  KeyframePool keyframes;
   TrackingPipeline pipeline;
-  EXPECT_TRUE(pipeline.init(synthetic_params(scene, residuals)).is_ok());
+  EXPECT_TRUE(pipeline.init(synthetic_params(scene, residuals), &keyframes).is_ok());
   const SE3 T_w0 = testing::SyntheticScene::pose_at(0.0);
   PathError err;
   const auto& rendered = scene.render_path(frames, fps);

@@ -23,12 +23,45 @@ TEST(KeyframePool, RecyclesTheOldestFreeKeyframeWhenFull) {
   EXPECT_EQ(pool.recycled(), 1);
   // Now b is the oldest; as the reference it stays, so c (the next oldest) goes.
   EXPECT_EQ(pool.acquire(b), c);
-  // A keyframe being mapped is never recycled either.
-  b->being_mapped.store(true);
+  // A pinned keyframe (being mapped) is never recycled either.
+  const KeyframeHandle pinned = pool.handle(b);
+  pool.pin(pinned);
   Keyframe* d = pool.acquire(c);
   EXPECT_NE(d, b);
   EXPECT_NE(d, c);
   EXPECT_EQ(pool.recycled(), 3);
+  EXPECT_EQ(pool.get(pinned), b);
+  pool.unpin(pinned);
+}
+
+TEST(KeyframePool, AHandleToARecycledKeyframeReadsAsGone) {
+  KeyframeBuilder builder;
+  builder.allocate(PinholeIntrinsics{50, 50, 31.5, 23.5, 64, 48}, TrackerOptions());
+  KeyframePool pool;
+  pool.allocate(3, builder, 16);
+  Keyframe* a = pool.acquire(nullptr);
+  const KeyframeHandle h = pool.handle(a);
+  EXPECT_EQ(pool.get(h), a);
+  Keyframe* b = pool.acquire(a);
+  pool.acquire(b);
+  EXPECT_EQ(pool.acquire(b), a) << "the oldest goes";
+  EXPECT_EQ(pool.get(h), nullptr) << "the eviction notice: the old handle is stale";
+  EXPECT_EQ(pool.get(pool.handle(a)), a);
+}
+
+TEST(KeyframePool, APublishedMapIsAdoptedOnceBetweenFrames) {
+  KeyframeBuilder builder;
+  builder.allocate(PinholeIntrinsics{50, 50, 31.5, 23.5, 64, 48}, TrackerOptions());
+  KeyframePool pool;
+  pool.allocate(3, builder, 16);
+  Keyframe* a = pool.acquire(nullptr);
+  EXPECT_FALSE(pool.adopt_map(a));
+  const FixedVector<TrackPoint>* before = &a->photometric(0);
+  EXPECT_EQ(a->inactive_photometric(), &a->photometric_sets[1][0]);
+  pool.publish_map(pool.handle(a));
+  EXPECT_TRUE(pool.adopt_map(a));
+  EXPECT_NE(&a->photometric(0), before) << "the mapper's set is now the active one";
+  EXPECT_FALSE(pool.adopt_map(a)) << "adopted once";
 }
 
 }  // namespace

@@ -4,7 +4,6 @@
 // by their standard deviations, gain and brightness, inverse-compositional Gauss-Newton on
 // SE(3) over a 4-level pyramid. All buffers are sized in allocate(); track() never allocates.
 
-#include <atomic>
 #include <cstdint>
 
 #include "rgbdtam/core/canny.hpp"
@@ -46,38 +45,29 @@ struct TrackPoint {
   float J[6];     // d residual / d (v, omega) at the identity, keyframe side
 };
 
-// A keyframe's residual points. Its photometric points are double-buffered: the mapper writes
-// the fused map into the inactive set once and raises map_ready; the tracker's thread adopts
-// it between frames (adopt_map), so neither ever waits for the other.
 // A point of a keyframe's mapped depth, in the keyframe's camera frame, m.
 struct MapPoint {
   float x, y, z;
 };
 
+// A keyframe's residual points. Its photometric points are double-buffered: the mapper writes
+// the fused map into the inactive set, and the tracker swaps the sets between frames once told
+// the map is there. The telling, and which thread may touch what when, are the runtime's
+// (KeyframePool); this type knows no threads.
 struct Keyframe {
   uint32_t id = 0;
   int64_t timestamp_ns = 0;
   SE3 T_w_k;
   FixedVector<TrackPoint> photometric_sets[2][kPyramidLevels];
   FixedVector<TrackPoint> geometric[kPyramidLevels];  // sensor depth only
-  std::atomic<int> active_photometric{0};
-  std::atomic<bool> map_ready{false};     // mapper -> tracker: the inactive set is the new map
-  std::atomic<bool> being_mapped{false};  // the pool must not recycle it
-  FixedVector<MapPoint> map_points;       // the mapper's fused edge map, set with map_ready
+  int active_photometric = 0;
+  FixedVector<MapPoint> map_points;  // the mapper's fused edge map, with the inactive set
 
   const FixedVector<TrackPoint>& photometric(int level) const {
-    return photometric_sets[active_photometric.load(std::memory_order_relaxed)][level];
+    return photometric_sets[active_photometric][level];
   }
-  FixedVector<TrackPoint>* inactive_photometric() {
-    return photometric_sets[1 - active_photometric.load(std::memory_order_acquire)];
-  }
-  // Tracker thread, between frames. True when a new map was adopted.
-  bool adopt_map() {
-    if (!map_ready.exchange(false, std::memory_order_acq_rel)) return false;
-    active_photometric.store(1 - active_photometric.load(std::memory_order_relaxed),
-                             std::memory_order_release);
-    return true;
-  }
+  FixedVector<TrackPoint>* inactive_photometric() { return photometric_sets[1 - active_photometric]; }
+  void swap_photometric() { active_photometric = 1 - active_photometric; }
 };
 
 // Selects a keyframe's residual points; owns its scratch images.

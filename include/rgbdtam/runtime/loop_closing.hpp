@@ -34,12 +34,29 @@ struct LoopCounters {
   uint32_t corrections_dropped = 0;  // the tracker had not taken the previous one
 };
 
+// A place the loop module verified in 3-D for a new keyframe, for tools that check place
+// recognition against ground truth. Called on the loop module's thread.
+struct PlaceMatchEvent {
+  uint32_t query_id = 0, place_id = 0;
+  int64_t query_ns = 0, place_ns = 0;
+  SE3 T_place_query;
+  int inliers = 0;
+  bool loop = false;  // it became a loop edge (consistent, and the best of its query)
+};
+
+class LoopObserver {
+ public:
+  virtual ~LoopObserver() = default;
+  virtual void on_verified(const PlaceMatchEvent& event) = 0;
+};
+
 class LoopModule {
  public:
   Status init(const Params& params, const Vocabulary* vocabulary, PlaceStore* store,
               CorrectionQueue* corrections, ClockFn clock);
   void step(const LoopKeyframe& keyframe);
   void finish() {}
+  void set_observer(LoopObserver* observer) { observer_ = observer; }
   const LoopCounters& counters() const { return counters_; }
   const LatencyStats& describe_time() const { return describe_time_; }
   const LatencyStats& query_time() const { return query_time_; }
@@ -67,6 +84,7 @@ class LoopModule {
   PlaceStore* store_ = nullptr;
   CorrectionQueue* corrections_ = nullptr;
   ClockFn clock_ = nullptr;
+  LoopObserver* observer_ = nullptr;
   PlaceRecognizer recognizer_;
   VerificationLimits limits_;
   PoseGraph graph_;

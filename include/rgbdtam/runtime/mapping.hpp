@@ -2,7 +2,7 @@
 // The mapping module (paper sec. V). The tracker hands it every tracked frame through a
 // bounded single-producer single-consumer queue of fixed slots; the mapper estimates the newest
 // keyframe's multi-view inverse depth, fuses it with the sensor's, and publishes the keyframe's
-// refreshed photometric points to the tracker (Keyframe::map_ready). step() is the same code
+// refreshed photometric points to the tracker (KeyframePool::publish_map). step() is the same code
 // whether a replay drains the queue synchronously or the mapper's own thread does.
 //
 // Queue policy when full: the tracker never waits. The frame is not queued and is counted in
@@ -13,6 +13,7 @@
 
 #include "rgbdtam/core/multiview.hpp"
 #include "rgbdtam/core/tracker.hpp"
+#include "rgbdtam/runtime/keyframe_pool.hpp"
 #include "rgbdtam/runtime/latency_stats.hpp"
 #include "rgbdtam/runtime/params.hpp"
 #include "rgbdtam/runtime/spsc_ring.hpp"
@@ -27,7 +28,7 @@ struct MapperFrame {
   uint32_t reset_counter = 0;  // a change means the poses before it are not comparable
   int64_t timestamp_ns = 0;
   SE3 T_w_c;
-  Keyframe* new_keyframe = nullptr;  // set when this frame became a keyframe
+  KeyframeHandle new_keyframe;  // set when this frame became a keyframe (pinned for the mapper)
   ImageF gray;                       // level 0, undistorted, [0,1]
   ImageF inverse_depth;              // level 0 sensor inverse depth; filled for keyframes only
   ImageU8 edges;                     // level 0 Canny edges; filled for keyframes only
@@ -60,7 +61,8 @@ struct MappingCounters {
 class MappingModule {
  public:
   static constexpr int kOpenKeyframes = 3;  // params.cpp sizes the keyframe pool for this
-  Status init(const Params& params, const PinholeIntrinsics& k, ClockFn clock, MapSink* sink);
+  Status init(const Params& params, const PinholeIntrinsics& k, ClockFn clock, MapSink* sink,
+              KeyframePool* keyframes);
   void step(const MapperFrame& frame);
   // Finishes the keyframe in progress (end of stream).
   void finish();
@@ -72,6 +74,7 @@ class MappingModule {
   // own frame budget is spent, so that quickly replaced keyframes are still triangulated.
   struct Job {
     Keyframe* keyframe = nullptr;  // null when the slot is free
+    KeyframeHandle handle;
     SeedMap seeds;
     ImageF gray;                  // the keyframe's level-0 image, for matching
     ImageF sensor_inverse_depth;  // the keyframe's own
@@ -97,6 +100,7 @@ class MappingModule {
   void finalize(Job* job);
 
   Params params_;
+  KeyframePool* keyframes_ = nullptr;
   MultiViewOptions mv_;
   ClockFn clock_ = nullptr;
   MapSink* sink_ = nullptr;

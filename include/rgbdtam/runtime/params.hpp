@@ -48,6 +48,12 @@ struct LoopParams {
   // A verified loop moves the map only when it disagrees with it by more than this.
   double min_correction_m = 0.02;
   double min_correction_rad = 1.0 * M_PI / 180.0;
+  // A correction that moves the camera further than this is a jump a consumer differencing
+  // poses would take for motion: the poses after it are withheld for that window
+  // (reset_after_lost). Half the false-valid tolerance (10 cm, 5 degrees over 0.5 s), leaving
+  // the other half to the tracker's own error.
+  double max_reported_jump_m = 0.05;
+  double max_reported_jump_rad = 2.5 * M_PI / 180.0;
 };
 
 struct Params {

@@ -47,9 +47,12 @@ class SlamSystem {
   // pool, else from the places. Tracker's thread.
   bool keyframe_pose(uint32_t keyframe_id, SE3* T_w_k);
   bool loop_enabled() const { return loop_on_; }
+  // Init time: tools that check place recognition receive every verified match.
+  void set_loop_observer(LoopObserver* observer) { loop_.set_observer(observer); }
 
  private:
   Params params_;
+  KeyframePool keyframes_;  // dense tier; the light tier is places_
   TrackingPipeline tracking_;
   MapperQueue queue_;
   MappingModule mapper_;

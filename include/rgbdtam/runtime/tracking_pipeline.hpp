@@ -35,7 +35,8 @@ struct TrackingCounters {
 
 class TrackingPipeline {
  public:
-  Status init(const Params& params);
+  // keyframes: the dense keyframe store, allocated here, shared with the mapper.
+  Status init(const Params& params, KeyframePool* keyframes);
   PoseEstimate process(const SensorFrame& frame);
   // Every tracked frame is offered to the mapper through this queue (never waiting on it).
   void connect_mapper(MapperQueue* queue) { mapper_queue_ = queue; }
@@ -45,7 +46,7 @@ class TrackingPipeline {
                     const Vocabulary* vocabulary);
 
   const TrackingCounters& counters() const { return counters_; }
-  const KeyframePool& keyframes() const { return pool_; }
+  const KeyframePool& keyframes() const { return *pool_; }
   const Params& params() const { return params_; }
   // The keyframe's pose now (loop corrections included), if it is still in the pool.
   bool keyframe_pose(uint32_t id, SE3* T_w_k) const;
@@ -96,7 +97,7 @@ class TrackingPipeline {
   int next_local_map_ = 0;
   ImageU16 depth_undistorted_;
   KeyframeBuilder builder_;
-  KeyframePool pool_;
+  KeyframePool* pool_ = nullptr;
   Tracker tracker_;
   Keyframe* reference_ = nullptr;
   Keyframe* fallback_ = nullptr;  // built from the last valid frame while tracking fails
