@@ -78,9 +78,8 @@ Status TumRecorder::open(const char* out_dir, int width, int height) {
 }
 
 Status TumRecorder::start(const ThreadPlacement& placement) {
-  stopping_ = false;
-  thread_ = std::thread([this] { run(); });
-  return place_thread(thread_, placement, "rgbdtam-record");
+  return worker_.start(&queue_, &writer_, placement, "rgbdtam-record",
+                       std::chrono::milliseconds(20));
 }
 
 bool TumRecorder::push(const SensorFrame& frame) {
@@ -96,7 +95,7 @@ bool TumRecorder::push(const SensorFrame& frame) {
   s->timestamp_ns = frame.timestamp_ns;
   s->depth_timestamp_ns = frame.depth_timestamp_ns;
   queue_.publish();
-  wake_.notify_one();
+  worker_.notify();
   return true;
 }
 
@@ -148,33 +147,14 @@ void TumRecorder::keep_first_error(const Status& s) {
   failed_.store(true, std::memory_order_release);
 }
 
-void TumRecorder::run() {
-  for (;;) {
-    while (Slot* s = queue_.front()) {
-      const int64_t t0 = monotonic_ns();
-      keep_first_error(failed() ? Status::ok() : write_frame(*s));
-      queue_.pop();
-      per_frame_.add(monotonic_ns() - t0);
-    }
-    if (stopping_.load(std::memory_order_acquire)) return;
-    std::unique_lock<std::mutex> lock(mutex_);
-    wake_.wait_for(lock, std::chrono::milliseconds(20), [this] {
-      return stopping_.load(std::memory_order_acquire) || queue_.front() != nullptr;
-    });
-  }
+void TumRecorder::Writer::step(const Slot& s) {
+  const int64_t t0 = monotonic_ns();
+  recorder->keep_first_error(recorder->failed() ? Status::ok() : recorder->write_frame(s));
+  recorder->per_frame_.add(monotonic_ns() - t0);
 }
 
 Status TumRecorder::finish() {
-  if (thread_.joinable()) {
-    stopping_.store(true, std::memory_order_release);
-    wake_.notify_one();
-    thread_.join();
-    // Frames queued after the thread's last look.
-    while (Slot* s = queue_.front()) {
-      keep_first_error(failed() ? Status::ok() : write_frame(*s));
-      queue_.pop();
-    }
-  }
+  if (worker_.running()) worker_.stop();  // writes what is queued first
   for (int* fd : {&rgb_list_, &depth_list_}) {
     if (*fd >= 0 && ::close(*fd) != 0 && error_.is_ok()) {
       error_ =

@@ -5,10 +5,6 @@
 
 namespace rgbdtam {
 
-LinkTask::~LinkTask() {
-  if (thread_.joinable()) stop();
-}
-
 void LinkTask::init(const PoseLinkConfig& config, ByteLink* link, int queue_slots, ClockFn clock) {
   transport_ = link;
   link_.init(config, link);
@@ -17,9 +13,9 @@ void LinkTask::init(const PoseLinkConfig& config, ByteLink* link, int queue_slot
 }
 
 Status LinkTask::start(const ThreadPlacement& placement) {
-  stopping_ = false;
-  thread_ = std::thread([this] { run(); });
-  return place_thread(thread_, placement, "rgbdtam-link");
+  // The heartbeat's 1 Hz needs a tick at least every 100 ms even without traffic.
+  return worker_.start(&queue_, &sender_, placement, "rgbdtam-link",
+                       std::chrono::milliseconds(100));
 }
 
 bool LinkTask::post(const LinkMessage& m) {
@@ -30,7 +26,7 @@ bool LinkTask::post(const LinkMessage& m) {
   }
   *slot = m;
   queue_.publish();
-  wake_.notify_one();
+  worker_.notify();
   return true;
 }
 
@@ -51,35 +47,27 @@ bool LinkTask::post_status(uint8_t severity, const char* text) {
 }
 
 void LinkTask::stop() {
-  stopping_.store(true, std::memory_order_release);
-  wake_.notify_one();
-  thread_.join();
+  if (worker_.running()) worker_.stop();
 }
 
-void LinkTask::run() {
-  // The heartbeat's 1 Hz needs a turn at least every 100 ms even without traffic.
-  constexpr auto kIdle = std::chrono::milliseconds(100);
-  for (;;) {
-    while (LinkMessage* m = queue_.front()) {
-      const int64_t t0 = clock_();
-      if (m->kind == LinkMessage::Kind::kPose) {
-        link_.set_time_base(m->pose.timestamp_ns, m->arrival_ns);
-        link_.on_pose(m->pose, t0);
-      } else {
-        link_.on_status(m->severity, m->text, t0);
-      }
-      queue_.pop();
-      per_message_.add(clock_() - t0);
-    }
-    link_.tick(clock_(), system_status_.load(std::memory_order_relaxed));
-    if (stopping_.load(std::memory_order_acquire) && queue_.front() == nullptr) break;
-    std::unique_lock<std::mutex> lock(mutex_);
-    wake_.wait_for(lock, kIdle, [this] {
-      return stopping_.load(std::memory_order_acquire) || queue_.front() != nullptr;
-    });
+void LinkTask::Sender::step(const LinkMessage& m) {
+  const int64_t t0 = task->clock_();
+  if (m.kind == LinkMessage::Kind::kPose) {
+    task->link_.set_time_base(m.pose.timestamp_ns, m.arrival_ns);
+    task->link_.on_pose(m.pose, t0);
+  } else {
+    task->link_.on_status(m.severity, m.text, t0);
   }
+  task->per_message_.add(task->clock_() - t0);
+}
+
+void LinkTask::Sender::tick() {
+  task->link_.tick(task->clock_(), task->system_status_.load(std::memory_order_relaxed));
+}
+
+void LinkTask::Sender::finish() {
   // Give a serial port the time its queued bytes need (at most a second).
-  for (int i = 0; i < 100 && transport_->flush() > 0; ++i) {
+  for (int i = 0; i < 100 && task->transport_->flush() > 0; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   }
 }

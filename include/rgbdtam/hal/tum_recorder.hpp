@@ -6,9 +6,6 @@
 // frame that finds the queue full is dropped and counted.
 
 #include <atomic>
-#include <condition_variable>
-#include <mutex>
-#include <thread>
 
 #include "rgbdtam/core/image.hpp"
 #include "rgbdtam/hal/png_encoder.hpp"
@@ -16,6 +13,7 @@
 #include "rgbdtam/runtime/messages.hpp"
 #include "rgbdtam/runtime/spsc_ring.hpp"
 #include "rgbdtam/runtime/thread_placement.hpp"
+#include "rgbdtam/runtime/worker.hpp"
 
 namespace rgbdtam {
 
@@ -51,7 +49,13 @@ class TumRecorder {
     int64_t depth_timestamp_ns = 0;
     bool has_depth = false;
   };
-  void run();
+  // The module on the recorder's thread.
+  struct Writer {
+    TumRecorder* recorder;
+    void step(const Slot& s);
+    void tick() {}
+    void finish() {}
+  };
   void keep_first_error(const Status& s);  // and stop writing
   Status write_frame(const Slot& s);
   Status write_file(const char* relative, const uint8_t* bytes, size_t n);
@@ -69,10 +73,8 @@ class TumRecorder {
   std::atomic<uint64_t> bytes_{0};
   Status error_;
   std::atomic<bool> failed_{false};
-  std::thread thread_;
-  std::mutex mutex_;
-  std::condition_variable wake_;
-  std::atomic<bool> stopping_{false};
+  Writer writer_{this};
+  WorkerThread<Slot, Writer> worker_;
 };
 
 }  // namespace rgbdtam

@@ -4,14 +4,12 @@
 // waits: a full queue drops the message and counts it.
 
 #include <atomic>
-#include <condition_variable>
-#include <mutex>
-#include <thread>
 
 #include "rgbdtam/runtime/latency_stats.hpp"
 #include "rgbdtam/runtime/pose_link.hpp"
 #include "rgbdtam/runtime/spsc_ring.hpp"
 #include "rgbdtam/runtime/thread_placement.hpp"
+#include "rgbdtam/runtime/worker.hpp"
 
 namespace rgbdtam {
 
@@ -28,7 +26,6 @@ using ClockFn = int64_t (*)();
 
 class LinkTask {
  public:
-  ~LinkTask();
   void init(const PoseLinkConfig& config, ByteLink* link, int queue_slots, ClockFn clock);
   Status start(const ThreadPlacement& placement);
   // Tracker thread. False when the queue was full (the message is dropped and counted).
@@ -46,8 +43,14 @@ class LinkTask {
   const LatencyStats& time_per_message() const { return per_message_; }
 
  private:
+  // The module on the link's thread.
+  struct Sender {
+    LinkTask* task;
+    void step(const LinkMessage& m);
+    void tick();
+    void finish();
+  };
   bool post(const LinkMessage& m);
-  void run();
 
   PoseLink link_;
   ByteLink* transport_ = nullptr;
@@ -56,10 +59,8 @@ class LinkTask {
   LatencyStats per_message_;
   std::atomic<uint8_t> system_status_{3};  // MAV_STATE_STANDBY
   std::atomic<uint64_t> queue_drops_{0};
-  std::thread thread_;
-  std::mutex mutex_;
-  std::condition_variable wake_;
-  std::atomic<bool> stopping_{false};
+  Sender sender_{this};
+  WorkerThread<LinkMessage, Sender> worker_;
 };
 
 }  // namespace rgbdtam

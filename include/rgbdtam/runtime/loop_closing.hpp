@@ -55,6 +55,7 @@ class LoopModule {
   Status init(const Params& params, const Vocabulary* vocabulary, PlaceStore* store,
               CorrectionQueue* corrections, ClockFn clock);
   void step(const LoopKeyframe& keyframe);
+  void tick() {}
   void finish() {}
   void set_observer(LoopObserver* observer) { observer_ = observer; }
   const LoopCounters& counters() const { return counters_; }

@@ -65,6 +65,7 @@ class MappingModule {
               KeyframePool* keyframes);
   void step(const MapperFrame& frame);
   // Finishes the keyframe in progress (end of stream).
+  void tick() {}
   void finish();
   const MappingCounters& counters() const { return counters_; }
   const LatencyStats& time_per_keyframe() const { return per_keyframe_; }

@@ -1,7 +1,10 @@
 #pragma once
-// One module skeleton: a module is step(const Item&) plus finish(), fed from a bounded SPSC ring.
-// The same module code runs synchronously (deterministic replay drains the ring between
-// frames) or on its own thread, placed from the board's task table.
+// One module skeleton: a module is step(const Item&), tick() and finish(), fed from a bounded
+// SPSC ring. The same module code runs synchronously (deterministic replay drains the ring
+// between frames) or on its own thread, placed from the board's task table: the thread steps
+// through what is queued, ticks (for work with a period of its own, such as a heartbeat),
+// and sleeps until notified or until the idle period ends. Stopping steps through what is
+// still queued, then finishes.
 
 #include <atomic>
 #include <chrono>
@@ -29,10 +32,13 @@ class WorkerThread {
   ~WorkerThread() {
     if (thread_.joinable()) stop();
   }
+  // idle: the longest sleep; it also bounds the delay of a notify that lands between the
+  // thread's last look at the queue and its wait (producers never take the lock).
   Status start(SpscRing<Item>* queue, Module* module, const ThreadPlacement& placement,
-               const char* name) {
+               const char* name, std::chrono::milliseconds idle = std::chrono::milliseconds(5)) {
     queue_ = queue;
     module_ = module;
+    idle_ = idle;
     stopping_ = false;
     thread_ = std::thread([this] { run(); });
     return place_thread(thread_, placement, name);
@@ -49,15 +55,14 @@ class WorkerThread {
  private:
   void run() {
     for (;;) {
-      if (Item* item = queue_->front()) {
+      while (Item* item = queue_->front()) {
         module_->step(*item);
         queue_->pop();
-        continue;
       }
-      if (stopping_.load(std::memory_order_acquire)) break;
+      module_->tick();
+      if (stopping_.load(std::memory_order_acquire) && queue_->front() == nullptr) break;
       std::unique_lock<std::mutex> lock(mutex_);
-      // The timeout covers a notify that lands between the check above and this wait.
-      wake_.wait_for(lock, std::chrono::milliseconds(5), [this] {
+      wake_.wait_for(lock, idle_, [this] {
         return stopping_.load(std::memory_order_acquire) || queue_->front() != nullptr;
       });
     }
@@ -66,6 +71,7 @@ class WorkerThread {
 
   SpscRing<Item>* queue_ = nullptr;
   Module* module_ = nullptr;
+  std::chrono::milliseconds idle_{5};
   std::thread thread_;
   std::mutex mutex_;
   std::condition_variable wake_;
