@@ -220,10 +220,8 @@ void FeatureExtractor::extract(const ImageF& gray, const ImageF& inverse_depth,
     describe(c.x, c.y, orientation(gray, c.x, c.y), &f.descriptor);
     f.u_px = c.x;
     f.v_px = c.y;
-    const float z = 1.f / inverse_depth.at(c.x, c.y);
-    f.x_m = static_cast<float>((c.x - k.cx_px) / k.fx_px) * z;
-    f.y_m = static_cast<float>((c.y - k.cy_px) / k.fy_px) * z;
-    f.z_m = z;
+    f.z_m = 1.f / inverse_depth.at(c.x, c.y);
+    k.pinhole().back_project(f.u_px, f.v_px, f.z_m, &f.x_m, &f.y_m);
     (void)out->push_back(f);
   }
 }

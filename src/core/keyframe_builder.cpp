@@ -177,16 +177,15 @@ void KeyframeBuilder::select_photometric(const FramePyramid& frame, const FrameP
     for (int x = kBorderPx; x < w - kBorderPx; ++x) count += candidate(x, y) ? 1 : 0;
   const int64_t cap = out->capacity();
   int64_t index = 0;
-  const float fx = static_cast<float>(k.fx_px), fy = static_cast<float>(k.fy_px);
-  const float cx = static_cast<float>(k.cx_px), cy = static_cast<float>(k.cy_px);
+  const Pinhole pinhole = k.pinhole();
+  const float fx = pinhole.fx, fy = pinhole.fy;
   for (int y = kBorderPx; y < h - kBorderPx; ++y) {
     for (int x = kBorderPx; x < w - kBorderPx; ++x) {
       if (!candidate(x, y)) continue;
       if (!keep_candidate(index++, count, cap)) continue;
       TrackPoint p;
       p.z = 1.0f / idepth.at(x, y);
-      p.x = (static_cast<float>(x) - cx) / fx * p.z;
-      p.y = (static_cast<float>(y) - cy) / fy * p.z;
+      pinhole.back_project(static_cast<float>(x), static_cast<float>(y), p.z, &p.x, &p.y);
       p.ref = img.at(x, y);
       const float gx = gx_[level].at(x, y), gy = gy_[level].at(x, y);
       const float iz = 1.0f / p.z;
@@ -225,8 +224,8 @@ void KeyframeBuilder::select_geometric(const FramePyramid& frame, int level,
     for (int x = start; x < w - kBorderPx; x += step) count += candidate(x, y) ? 1 : 0;
   const int64_t cap = out->capacity();
   int64_t index = 0;
-  const float fx = static_cast<float>(k.fx_px), fy = static_cast<float>(k.fy_px);
-  const float cx = static_cast<float>(k.cx_px), cy = static_cast<float>(k.cy_px);
+  const Pinhole pinhole = k.pinhole();
+  const float fx = pinhole.fx, fy = pinhole.fy;
   const bool inverse = opt_.residuals.geometric == GeometricMode::kInverseDepth;
   for (int y = start; y < h - kBorderPx; y += step) {
     for (int x = start; x < w - kBorderPx; x += step) {
@@ -235,8 +234,7 @@ void KeyframeBuilder::select_geometric(const FramePyramid& frame, int level,
       TrackPoint p;
       const float rho = idepth.at(x, y);
       p.z = 1.0f / rho;
-      p.x = (static_cast<float>(x) - cx) / fx * p.z;
-      p.y = (static_cast<float>(y) - cy) / fy * p.z;
+      pinhole.back_project(static_cast<float>(x), static_cast<float>(y), p.z, &p.x, &p.y);
       p.ref = rho;
       const float gx = dgx_[level].at(x, y), gy = dgy_[level].at(x, y);
       const float slope = gx * fx * p.x + gy * fy * p.y;

@@ -13,17 +13,17 @@ constexpr float kIntervalSigmas = 4.f;  // a seed's search interval after an obs
 struct Epipolar {
   Eigen::Vector3f a;  // R d: the ray of the keyframe pixel in the current frame
   Eigen::Vector3f t;  // translation of T_c_k
-  float fx, fy, cx, cy;
+  Pinhole pinhole;
   // Projection of the keyframe pixel at inverse depth rho: pi(R d / rho + t) = pi(R d + rho t).
   bool project(float rho, Eigen::Vector2f* u) const {
     const Eigen::Vector3f h = a + rho * t;
     if (h.z() < 1e-3f) return false;
-    *u = Eigen::Vector2f(fx * h.x() / h.z() + cx, fy * h.y() / h.z() + cy);
+    pinhole.project(h.x(), h.y(), h.z(), &u->x(), &u->y());
     return true;
   }
   // The inverse depth whose projection is u, solved on the image axis the line moves along most.
   float inverse_depth_at(const Eigen::Vector2f& u, bool along_x) const {
-    const float m = along_x ? (u.x() - cx) / fx : (u.y() - cy) / fy;
+    const float m = along_x ? (u.x() - pinhole.cx) / pinhole.fx : (u.y() - pinhole.cy) / pinhole.fy;
     const float num = (along_x ? a.x() : a.y()) - m * a.z();
     const float den = m * t.z() - (along_x ? t.x() : t.y());
     return std::fabs(den) < 1e-9f ? -1.f : num / den;
@@ -90,14 +90,11 @@ void SeedMap::reset(const ImageF& gray, const ImageF& sensor_inverse_depth, cons
 
 bool SeedMap::search(const Seed& s, const ImageF& cur, const SE3& T_c_k, Observation* out) const {
   Epipolar e;
-  const Eigen::Vector3f d((s.x - static_cast<float>(k_.cx_px)) / static_cast<float>(k_.fx_px),
-                          (s.y - static_cast<float>(k_.cy_px)) / static_cast<float>(k_.fy_px), 1.f);
+  e.pinhole = k_.pinhole();
+  Eigen::Vector3f d(0.f, 0.f, 1.f);
+  e.pinhole.back_project(s.x, s.y, 1.f, &d.x(), &d.y());
   e.a = T_c_k.rotation().cast<float>() * d;
   e.t = T_c_k.translation().cast<float>();
-  e.fx = static_cast<float>(k_.fx_px);
-  e.fy = static_cast<float>(k_.fy_px);
-  e.cx = static_cast<float>(k_.cx_px);
-  e.cy = static_cast<float>(k_.cy_px);
   Eigen::Vector2f u_far, u_near;
   if (!e.project(s.rho_lo, &u_far) || !e.project(s.rho_hi, &u_near)) return false;
   const Eigen::Vector2f segment = u_near - u_far;
@@ -110,15 +107,15 @@ bool SeedMap::search(const Seed& s, const ImageF& cur, const SE3& T_c_k, Observa
   const Eigen::Vector3f centre =
       -(T_c_k.rotation().transpose() * T_c_k.translation()).cast<float>();
   const Eigen::Vector3f towards = centre - p;
-  Eigen::Vector2f dir_k(e.fx * (towards.x() - p.x() / p.z() * towards.z()) / p.z(),
-                        e.fy * (towards.y() - p.y() / p.z() * towards.z()) / p.z());
+  Eigen::Vector2f dir_k(e.pinhole.fx * (towards.x() - p.x() / p.z() * towards.z()) / p.z(),
+                        e.pinhole.fy * (towards.y() - p.y() / p.z() * towards.z()) / p.z());
   if (dir_k.norm() < 1e-6f) return false;
   dir_k.normalize();
   // Orient it like the current frame's scan direction, or the two patches would be mirrored:
   // a keyframe pixel one step along dir_k, at the same depth, must move along +dir_c.
   Eigen::Vector2f at_mid, shifted;
-  const Eigen::Vector3f d_step((s.x + dir_k.x() - e.cx) / e.fx, (s.y + dir_k.y() - e.cy) / e.fy,
-                               1.f);
+  Eigen::Vector3f d_step(0.f, 0.f, 1.f);
+  e.pinhole.back_project(s.x + dir_k.x(), s.y + dir_k.y(), 1.f, &d_step.x(), &d_step.y());
   Epipolar stepped = e;
   stepped.a = T_c_k.rotation().cast<float>() * d_step;
   if (!e.project(rho_mid, &at_mid) || !stepped.project(rho_mid, &shifted)) return false;

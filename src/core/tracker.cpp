@@ -22,17 +22,14 @@ constexpr double kMaxDamping = 1e2;
 
 struct Projector {
   float r[9], t[3];
-  float fx, fy, cx, cy;
+  Pinhole pinhole;
   Projector(const SE3& T, const PinholeIntrinsics& k) {
     const Matrix3d R = T.rotation();
     for (int i = 0; i < 3; ++i) {
       for (int j = 0; j < 3; ++j) r[3 * i + j] = static_cast<float>(R(i, j));
       t[i] = static_cast<float>(T.translation()[i]);
     }
-    fx = static_cast<float>(k.fx_px);
-    fy = static_cast<float>(k.fy_px);
-    cx = static_cast<float>(k.cx_px);
-    cy = static_cast<float>(k.cy_px);
+    pinhole = k.pinhole();
   }
   // Returns false when the point is behind the camera.
   bool project(const TrackPoint& p, float* u, float* v, float* z) const {
@@ -40,9 +37,7 @@ struct Projector {
     const float qy = r[3] * p.x + r[4] * p.y + r[5] * p.z + t[1];
     const float qz = r[6] * p.x + r[7] * p.y + r[8] * p.z + t[2];
     if (qz < kMinDepthM) return false;
-    const float iz = 1.f / qz;
-    *u = fx * qx * iz + cx;
-    *v = fy * qy * iz + cy;
+    pinhole.project(qx, qy, qz, u, v);
     *z = qz;
     return true;
   }

@@ -40,11 +40,10 @@ void PlyMapWriter::on_keyframe_map(int64_t, const SE3& T_w_k, const PinholeIntri
   if (!file_.is_open() || !file_.status().is_ok()) return;
   const Eigen::Matrix3f R = T_w_k.rotation().cast<float>();
   const Eigen::Vector3f t = T_w_k.translation().cast<float>();
+  const Pinhole pinhole = k.pinhole();
   for (const FusedPixel& p : pixels) {
-    const float z = 1.f / p.rho;
-    const Eigen::Vector3f p_k((p.x - static_cast<float>(k.cx_px)) / static_cast<float>(k.fx_px) * z,
-                              (p.y - static_cast<float>(k.cy_px)) / static_cast<float>(k.fy_px) * z,
-                              z);
+    Eigen::Vector3f p_k(0.f, 0.f, 1.f / p.rho);
+    pinhole.back_project(p.x, p.y, p_k.z(), &p_k.x(), &p_k.y());
     const Eigen::Vector3f p_w = R * p_k + t;
     const uint8_t grey =
         static_cast<uint8_t>(std::min(255.f, std::max(0.f, p.intensity * 255.f + 0.5f)));

@@ -196,13 +196,13 @@ void MappingModule::finalize(Job* job) {
   Keyframe* kf = job->keyframe;
   builder_.build_photometric(fused_, job->edges, kf->inactive_photometric());
   kf->map_points.clear();
-  const PinholeIntrinsics& k = fused_.intrinsics(0);
+  const Pinhole pinhole = fused_.intrinsics(0).pinhole();
   for (const FusedPixel& p : pixels_) {
     if (!tracked(p)) continue;
-    const float z = 1.f / p.rho;
-    (void)kf->map_points.push_back(
-        {(p.x - static_cast<float>(k.cx_px)) / static_cast<float>(k.fx_px) * z,
-         (p.y - static_cast<float>(k.cy_px)) / static_cast<float>(k.fy_px) * z, z});
+    MapPoint m;
+    m.z = 1.f / p.rho;
+    pinhole.back_project(p.x, p.y, m.z, &m.x, &m.y);
+    (void)kf->map_points.push_back(m);
   }
   keyframes_->publish_map(job->handle);
   keyframes_->unpin(job->handle);

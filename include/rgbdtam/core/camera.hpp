@@ -9,6 +9,20 @@
 
 namespace rgbdtam {
 
+// The pinhole projection, written once: a point (x, y, z) of a camera's frame, z > 0, to its
+// pixel (u, v), and a pixel at depth z back to the point. Float, for the per-point loops.
+struct Pinhole {
+  float fx, fy, cx, cy;
+  void project(float x, float y, float z, float* u, float* v) const {
+    *u = fx * x / z + cx;
+    *v = fy * y / z + cy;
+  }
+  void back_project(float u, float v, float z, float* x, float* y) const {
+    *x = (u - cx) / fx * z;
+    *y = (v - cy) / fy * z;
+  }
+};
+
 struct PinholeIntrinsics {
   double fx_px = 0.0;
   double fy_px = 0.0;
@@ -17,6 +31,10 @@ struct PinholeIntrinsics {
   int width_px = 0;
   int height_px = 0;
 
+  Pinhole pinhole() const {
+    return {static_cast<float>(fx_px), static_cast<float>(fy_px), static_cast<float>(cx_px),
+            static_cast<float>(cy_px)};
+  }
   // Intrinsics of the next-coarser level of a 2x2-averaging pyramid: pixel centres
   // move by half a pixel, so c' = (c - 0.5) / 2.
   PinholeIntrinsics half() const {

@@ -14,13 +14,9 @@
 #include <memory>
 
 #include "rgbdtam/core/tracker.hpp"
+#include "rgbdtam/runtime/messages.hpp"
 
 namespace rgbdtam {
-
-struct KeyframeHandle {
-  int32_t slot = -1;
-  uint32_t generation = 0;
-};
 
 class KeyframePool {
  public:

@@ -13,15 +13,6 @@
 
 namespace rgbdtam {
 
-struct LinkMessage {
-  enum class Kind : uint8_t { kPose, kStatus };
-  Kind kind = Kind::kPose;
-  PoseEstimate pose;
-  int64_t arrival_ns = 0;  // when the pose's frame arrived, on the link's clock
-  uint8_t severity = 0;
-  char text[mavlink::kMaxStatusTextChars + 1] = {};  // sent in 50-character STATUSTEXT chunks
-};
-
 using ClockFn = int64_t (*)();
 
 class LinkTask {

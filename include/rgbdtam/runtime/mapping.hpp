@@ -22,18 +22,6 @@
 
 namespace rgbdtam {
 
-// Tracker -> mapper, one per tracked frame. The slot owns its images.
-struct MapperFrame {
-  uint32_t sequence = 0;
-  uint32_t reset_counter = 0;  // a change means the poses before it are not comparable
-  int64_t timestamp_ns = 0;
-  SE3 T_w_c;
-  KeyframeHandle new_keyframe;  // set when this frame became a keyframe (pinned for the mapper)
-  ImageF gray;                       // level 0, undistorted, [0,1]
-  ImageF inverse_depth;              // level 0 sensor inverse depth; filled for keyframes only
-  ImageU8 edges;                     // level 0 Canny edges; filled for keyframes only
-};
-
 // Tracker -> mapper frames; MapperQueue::allocate sizes each slot's images.
 class MapperQueue : public SpscRing<MapperFrame> {
  public:

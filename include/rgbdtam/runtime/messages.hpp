@@ -1,5 +1,5 @@
 #pragma once
-// Typed, fixed-size messages between modules. Timestamps are integer nanoseconds;
+// Typed, fixed-size messages between modules, all of them here. Timestamps are integer nanoseconds;
 // poses are T_w_c (world from camera), world = the first keyframe's camera frame.
 
 #include <cstdint>
@@ -7,6 +7,7 @@
 #include "rgbdtam/core/fixed_vector.hpp"
 #include "rgbdtam/core/image.hpp"
 #include "rgbdtam/core/se3.hpp"
+#include "rgbdtam/runtime/mavlink.hpp"
 
 namespace rgbdtam {
 
@@ -78,6 +79,35 @@ struct KeyframePose {
 struct LoopCorrection {
   uint32_t query_id = 0, match_id = 0;  // the keyframes the loop joined
   FixedVector<KeyframePose> poses;
+};
+
+// A dense keyframe of the KeyframePool: its slot, and the slot's generation when named (a
+// recycled slot has another, so a stale handle is detected).
+struct KeyframeHandle {
+  int32_t slot = -1;
+  uint32_t generation = 0;
+};
+
+// Tracker -> mapper, one per tracked frame. The slot owns its images.
+struct MapperFrame {
+  uint32_t sequence = 0;
+  uint32_t reset_counter = 0;  // a change means the poses before it are not comparable
+  int64_t timestamp_ns = 0;
+  SE3 T_w_c;
+  KeyframeHandle new_keyframe;  // set when this frame became a keyframe (pinned for the mapper)
+  ImageF gray;                       // level 0, undistorted, [0,1]
+  ImageF inverse_depth;              // level 0 sensor inverse depth; filled for keyframes only
+  ImageU8 edges;                     // level 0 Canny edges; filled for keyframes only
+};
+
+// Tracker (and firmware events) -> link task.
+struct LinkMessage {
+  enum class Kind : uint8_t { kPose, kStatus };
+  Kind kind = Kind::kPose;
+  PoseEstimate pose;
+  int64_t arrival_ns = 0;  // when the pose's frame arrived, on the link's clock
+  uint8_t severity = 0;
+  char text[mavlink::kMaxStatusTextChars + 1] = {};  // sent in 50-character STATUSTEXT chunks
 };
 
 }  // namespace rgbdtam
