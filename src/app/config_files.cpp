@@ -27,15 +27,13 @@ Status read_binary_file(const char* path, size_t max_bytes, std::unique_ptr<uint
                         size_t* size) {
   struct stat st;
   if (::stat(path, &st) != 0) {
-    return Status::error(StatusCode::kNotFound, "%s: cannot open (%s)", path,
-                         std::strerror(errno));
+    return Status::error(StatusCode::kNotFound, "%s: cannot open (%s)", path, std::strerror(errno));
   }
   if (!S_ISREG(st.st_mode)) {
     return Status::error(StatusCode::kInvalidArgument, "%s: not a regular file", path);
   }
   if (static_cast<size_t>(st.st_size) > max_bytes) {
-    return Status::error(StatusCode::kOutOfRange, "%s: larger than %zu MB", path,
-                         max_bytes >> 20);
+    return Status::error(StatusCode::kOutOfRange, "%s: larger than %zu MB", path, max_bytes >> 20);
   }
   const size_t capacity = static_cast<size_t>(st.st_size) + 1;
   data->reset(new uint8_t[capacity]);

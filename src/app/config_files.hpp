@@ -2,8 +2,8 @@
 // Reading the files a run is configured by: the parameter file (its relative paths resolved
 // against its own folder) and the place-recognition vocabulary it names.
 
-#include "rgbdtam/core/vocabulary.hpp"
 #include <memory>
+#include "rgbdtam/core/vocabulary.hpp"
 
 #include "rgbdtam/runtime/params.hpp"
 

@@ -37,8 +37,7 @@ Status check_memory_budget(const Params& params, int vocabulary_words, size_t pe
       static_cast<double>(*needed_bytes) / kMb, static_cast<double>(budget.bytes) / kMb,
       budget.from, params.keyframe_pool_size, static_cast<double>(need.per_keyframe) / kMb,
       static_cast<double>(need.mapper) / kMb, static_cast<double>(need.images) / kMb,
-      static_cast<double>(need.loop) / kMb, frames,
-      static_cast<double>(results) / kMb);
+      static_cast<double>(need.loop) / kMb, frames, static_cast<double>(results) / kMb);
 }
 
 }  // namespace rgbdtam

@@ -20,7 +20,6 @@ MemoryBudget memory_budget(int board_mb);
 // frames: what the job keeps for every frame (a replay's results). Ok when the need fits;
 // *needed_bytes is the need either way.
 Status check_memory_budget(const Params& params, int vocabulary_words, size_t per_frame_bytes,
-                           int frames,
-                           const MemoryBudget& budget, uint64_t* needed_bytes);
+                           int frames, const MemoryBudget& budget, uint64_t* needed_bytes);
 
 }  // namespace rgbdtam

@@ -40,8 +40,7 @@ Status collect(const char* sequence, const Params& p, int every,
                std::vector<std::vector<Descriptor>>* images) {
   TumReplaySource source;
   RGBDTAM_RETURN_IF_ERROR(source.open(sequence, p.camera.width_px, p.camera.height_px,
-                                      p.sensor.max_rgb_depth_dt_ns,
-                                      p.sensor.depth_time_offset_ns));
+                                      p.sensor.max_rgb_depth_dt_ns, p.sensor.depth_time_offset_ns));
   Undistorter undistorter;
   undistorter.init(p.camera, p.distortion);
   FramePyramid frame;
@@ -110,10 +109,11 @@ int train(const TrainOptions& o) {
     std::fprintf(stderr, "rgbdtam vocabulary train: %s\n", s.message());
     return 1;
   }
-  std::printf("vocabulary: %d words, %d nodes (k = %d, L = %d) from %zu descriptors of %zu "
-              "images; %zu bytes to %s\n",
-              v.words(), v.nodes(), o.branching, o.depth, descriptors, images.size(),
-              v.serialized_size(), o.out);
+  std::printf(
+      "vocabulary: %d words, %d nodes (k = %d, L = %d) from %zu descriptors of %zu "
+      "images; %zu bytes to %s\n",
+      v.words(), v.nodes(), o.branching, o.depth, descriptors, images.size(), v.serialized_size(),
+      o.out);
   return 0;
 }
 

@@ -6,8 +6,8 @@
 namespace rgbdtam {
 namespace {
 // The 16 pixels of the radius-3 Bresenham circle, clockwise from the top.
-constexpr int kCircle[16][2] = {{0, -3}, {1, -3}, {2, -2}, {3, -1}, {3, 0},  {3, 1},
-                                {2, 2},  {1, 3},  {0, 3},  {-1, 3}, {-2, 2}, {-3, 1},
+constexpr int kCircle[16][2] = {{0, -3}, {1, -3},  {2, -2},  {3, -1}, {3, 0},  {3, 1},
+                                {2, 2},  {1, 3},   {0, 3},   {-1, 3}, {-2, 2}, {-3, 1},
                                 {-3, 0}, {-3, -1}, {-2, -2}, {-1, -3}};
 constexpr int kOrientationRadius = 15;
 constexpr int kPatternRadius = 13;
@@ -67,8 +67,8 @@ void FeatureExtractor::allocate(int width, int height, const FeatureOptions& opt
   // 3x3 non-maximum suppression leaves at most one corner per 2x2 block.
   candidates_.reserve_once(width * height / 4);
   for (int dy = 0; dy <= kOrientationRadius; ++dy) {
-    circle_extent_[dy] = static_cast<int16_t>(
-        std::floor(std::sqrt(static_cast<double>(kOrientationRadius * kOrientationRadius - dy * dy))));
+    circle_extent_[dy] = static_cast<int16_t>(std::floor(
+        std::sqrt(static_cast<double>(kOrientationRadius * kOrientationRadius - dy * dy))));
   }
   // Test pairs drawn once, from a fixed seed, about an isotropic Gaussian (BRIEF's best
   // layout, sigma = patch / 5): a sum of four uniforms, kept inside the pattern's disc.

@@ -84,7 +84,8 @@ int PoseGraph::solve(int max_iterations) {
     delta_[i].setZero();
     r_[i] = -g_[i];
     // Block-Jacobi preconditioner; a tiny ridge keeps an unconstrained direction solvable.
-    preconditioner_[i] = (H_diag_[i] + 1e-9 * Matrix6d::Identity()).ldlt().solve(Matrix6d::Identity());
+    preconditioner_[i] =
+        (H_diag_[i] + 1e-9 * Matrix6d::Identity()).ldlt().solve(Matrix6d::Identity());
   }
   r_[0].setZero();
   double rz = 0.0, r0 = 0.0;

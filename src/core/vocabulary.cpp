@@ -41,7 +41,8 @@ uint32_t next_random(uint32_t* s) {
 Descriptor majority(const std::vector<Descriptor>& all, const std::vector<int>& members) {
   int ones[256] = {};
   for (const int m : members) {
-    for (int b = 0; b < 256; ++b) ones[b] += static_cast<int>((all[m].bits[b / 64] >> (b % 64)) & 1u);
+    for (int b = 0; b < 256; ++b)
+      ones[b] += static_cast<int>((all[m].bits[b / 64] >> (b % 64)) & 1u);
   }
   Descriptor c;
   for (int b = 0; b < 256; ++b) {

@@ -90,6 +90,10 @@ const KeySpec kSpecs[] = {
      RGBDTAM_FIELD(mapper.cpu), false},
     {"threads.mapper_priority", ValueType::kInt, 0, 99, "", "mapper SCHED_FIFO (0: normal)",
      RGBDTAM_FIELD(mapper.priority), false},
+    {"threads.loop_cpu", ValueType::kInt, -1, 255, "", "loop-closure CPU (-1: any)",
+     RGBDTAM_FIELD(loop.cpu), false},
+    {"threads.loop_priority", ValueType::kInt, 0, 99, "", "loop-closure SCHED_FIFO (0: normal)",
+     RGBDTAM_FIELD(loop.priority), false},
     {"threads.link_cpu", ValueType::kInt, -1, 255, "", "link CPU (-1: any)",
      RGBDTAM_FIELD(link.cpu), false},
     {"threads.link_priority", ValueType::kInt, 0, 99, "", "link SCHED_FIFO (0: normal)",
@@ -104,6 +108,8 @@ const KeySpec kSpecs[] = {
      RGBDTAM_FIELD(map_queue_frames), false},
     {"capacity.map_seeds", ValueType::kInt, 0, 100000, "", "override map.seeds (0: keep)",
      RGBDTAM_FIELD(map_seeds), false},
+    {"capacity.loop_places", ValueType::kInt, 0, 100000, "", "override loop.places (0: keep)",
+     RGBDTAM_FIELD(loop_places), false},
 };
 #undef RGBDTAM_TEXT
 #undef RGBDTAM_FIELD
@@ -216,6 +222,7 @@ Status validate_board(const Board& b) {
     const ThreadPlacement& t;
   } threads[] = {{"threads.tracker_cpu", b.tracker},
                  {"threads.mapper_cpu", b.mapper},
+                 {"threads.loop_cpu", b.loop},
                  {"threads.link_cpu", b.link},
                  {"threads.sensor_cpu", b.sensor}};
   for (const auto& t : threads) {
@@ -243,7 +250,8 @@ Status apply_board_capacity(const Board& b, Params* p) {
     int value;
   } overrides[] = {{"map.keyframe_pool", b.keyframe_pool},
                    {"map.queue_frames", b.map_queue_frames},
-                   {"map.seeds", b.map_seeds}};
+                   {"map.seeds", b.map_seeds},
+                   {"loop.places", b.loop_places}};
   char source[kTextBytes + 16];
   std::snprintf(source, sizeof(source), "board '%s'", b.name);
   for (const auto& o : overrides) {

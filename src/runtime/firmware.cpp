@@ -28,8 +28,7 @@ Status FirmwareRuntime::init(const Params& params, const Board& board, ByteLink*
 
 Status FirmwareRuntime::start() {
   RGBDTAM_RETURN_IF_ERROR(place_this_thread(board_.tracker, "rgbdtam-tracker"));
-  // The loop module shares the mapper's core: both are background work.
-  RGBDTAM_RETURN_IF_ERROR(slam_.start(board_.mapper, board_.mapper));
+  RGBDTAM_RETURN_IF_ERROR(slam_.start(board_.mapper, board_.loop));
   RGBDTAM_RETURN_IF_ERROR(link_.start(board_.link));
   started_ = true;
   return Status::ok();

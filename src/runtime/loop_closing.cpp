@@ -6,9 +6,9 @@
 
 namespace rgbdtam {
 namespace {
-constexpr int kCandidates = 3;              // best-scoring places verified per query
-constexpr double kMinRelativeScore = 0.5;   // ... when within this fraction of the best score
-constexpr int kConsistentOrderGap = 4;      // "the same place": records this close in the store
+constexpr int kCandidates = 3;             // best-scoring places verified per query
+constexpr double kMinRelativeScore = 0.5;  // ... when within this fraction of the best score
+constexpr int kConsistentOrderGap = 4;     // "the same place": records this close in the store
 constexpr int kGaussNewtonSteps = 10;
 // A relation the map does not know (a restart's jump): in the graph for connectedness only.
 constexpr double kUnknownRelationInformation = 1e-6;
@@ -89,15 +89,20 @@ bool LoopModule::detect(const LoopKeyframe& query, Found* found) {
   PlaceMatchEvent events[kCandidates];
   int verified = 0;
   // Only this thread writes the store, so it reads without the lock.
-  const int n = store_->database().query(recognizer_.bow(), is_loop_candidate, &filter, matches,
-                                         kCandidates);
+  const int n =
+      store_->database().query(recognizer_.bow(), is_loop_candidate, &filter, matches, kCandidates);
   for (int i = 0; i < n && matches[i].score >= kMinRelativeScore * matches[0].score; ++i) {
     const PlaceRecord& place = store_->at_slot(matches[i].slot);
     ++counters_.candidates;
     const RigidRansacResult fit = recognizer_.verify(place, limits_);
     if (fit.inliers == 0) continue;
-    events[verified++] = {query.keyframe_id, place.keyframe_id,    query.timestamp_ns,
-                          place.timestamp_ns, fit.T_b_a, fit.inliers, false};
+    events[verified++] = {query.keyframe_id,
+                          place.keyframe_id,
+                          query.timestamp_ns,
+                          place.timestamp_ns,
+                          fit.T_b_a,
+                          fit.inliers,
+                          false};
     if (verified > 1 && fit.inliers <= found->fit.inliers) continue;
     found->place = {matches[i].slot, place.generation};
     found->keyframe_id = place.keyframe_id;
@@ -178,9 +183,8 @@ void LoopModule::optimise(uint32_t query_id, uint32_t match_id) {
     const int ref = r.after_reset ? -1 : store_->order_of(r.reference_id);
     const int from = ref >= 0 && ref != i ? ref : i - 1;
     const SE3 T_from_k = store_->in_order(from).T_w_k.inverse() * r.T_w_k;
-    const Matrix6d information = r.after_reset
-                                     ? kUnknownRelationInformation * Matrix6d::Identity()
-                                     : edge_information(r, T_from_k);
+    const Matrix6d information = r.after_reset ? kUnknownRelationInformation * Matrix6d::Identity()
+                                               : edge_information(r, T_from_k);
     (void)graph_.add_edge(from, i, T_from_k, information);
   }
   auto order_of_handle = [&](const PlaceHandle& h) {
@@ -189,7 +193,8 @@ void LoopModule::optimise(uint32_t query_id, uint32_t match_id) {
   };
   for (const LoopEdge& e : loops_) {
     const int from = order_of_handle(e.from), to = order_of_handle(e.to);
-    if (from >= 0 && to >= 0 && from != to) (void)graph_.add_edge(from, to, e.T_from_to, e.information);
+    if (from >= 0 && to >= 0 && from != to)
+      (void)graph_.add_edge(from, to, e.T_from_to, e.information);
   }
   (void)graph_.optimize(kGaussNewtonSteps);
   LoopCorrection* out = corrections_->begin_push();

@@ -25,8 +25,8 @@ MemoryNeed memory_need(const Params& p, int vocabulary_words) {
     // The features' scratch images (3 float images and a corner list) twice, the keyframe
     // queue's images, the corrections and the pose graph.
     constexpr size_t kFeatureBytesPerPixel = 3 * sizeof(float) + 2;
-    constexpr size_t kGraphBytesPerPlace = 3 * sizeof(Matrix6d) + 6 * sizeof(Vector6d) +
-                                           2 * (sizeof(Matrix6d) * 2 + 64) + 64;
+    constexpr size_t kGraphBytesPerPlace =
+        3 * sizeof(Matrix6d) + 6 * sizeof(Vector6d) + 2 * (sizeof(Matrix6d) * 2 + 64) + 64;
     const size_t places = static_cast<size_t>(p.loop.places);
     m.loop = PlaceStore::bytes_needed(p.loop.places, p.loop.features, vocabulary_words) +
              pixels * (2 * kFeatureBytesPerPixel +

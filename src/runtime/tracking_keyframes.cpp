@@ -83,8 +83,8 @@ bool TrackingPipeline::reuse_keyframe(const Attempt& current, int64_t t_ns, Pose
   return true;
 }
 
-void TrackingPipeline::start_keyframe(const SensorFrame& frame, const SE3& T_w_c,
-                                      PoseEstimate* out, bool after_reset) {
+void TrackingPipeline::start_keyframe(const SensorFrame& frame, const SE3& T_w_c, PoseEstimate* out,
+                                      bool after_reset) {
   const uint32_t reference_id = reference_ != nullptr ? reference_->id : next_keyframe_id_;
   Keyframe* kf = pool_->acquire(reference_);
   // With mapping, the new keyframe starts with the previous one's map where its sensor is
@@ -124,7 +124,7 @@ void TrackingPipeline::propagate_map(const SE3& T_w_c) {
       const long u = std::lround(u_px);
       const long v = std::lround(v_px);
       if (u < 0 || v < 0 || u >= map.width() || v >= map.height()) continue;
-      if (sensor.at(u, v) > 0.f) continue;  // the sensor's own reading wins
+      if (sensor.at(u, v) > 0.f) continue;                 // the sensor's own reading wins
       map.at(u, v) = std::max(map.at(u, v), 1.f / q.z());  // nearest wins
     }
   }

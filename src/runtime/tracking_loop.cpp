@@ -8,7 +8,7 @@
 namespace rgbdtam {
 
 void TrackingPipeline::connect_loop(LoopQueue* keyframes, CorrectionQueue* corrections,
-                                     PlaceStore* places, const Vocabulary* vocabulary) {
+                                    PlaceStore* places, const Vocabulary* vocabulary) {
   loop_queue_ = keyframes;
   corrections_ = corrections;
   places_ = places;
@@ -52,8 +52,8 @@ bool TrackingPipeline::relocalise(const SensorFrame& frame, PoseEstimate* out) {
   {
     std::lock_guard<std::mutex> lock(places_->mutex());
     PlaceMatch matches[kCandidates];
-    const int n = places_->database().query(relocaliser_.bow(), nullptr, nullptr, matches,
-                                            kCandidates);
+    const int n =
+        places_->database().query(relocaliser_.bow(), nullptr, nullptr, matches, kCandidates);
     for (int i = 0; i < n; ++i) {
       const PlaceRecord& place = places_->at_slot(matches[i].slot);
       const RigidRansacResult fit = relocaliser_.verify(place, relocalisation_limits_);
@@ -124,9 +124,9 @@ void TrackingPipeline::adopt_corrections() {
 void TrackingPipeline::apply_correction(const LoopCorrection& c) {
   if (c.poses.empty()) return;
   auto corrected = [&](uint32_t id) -> const KeyframePose* {
-    const KeyframePose* p = std::lower_bound(
-        c.poses.begin(), c.poses.end(), id,
-        [](const KeyframePose& k, uint32_t key) { return k.keyframe_id < key; });
+    const KeyframePose* p =
+        std::lower_bound(c.poses.begin(), c.poses.end(), id,
+                         [](const KeyframePose& k, uint32_t key) { return k.keyframe_id < key; });
     return p != c.poses.end() && p->keyframe_id == id ? p : nullptr;
   };
   // Each remembered keyframe moves to its corrected pose; a keyframe newer than the correction
@@ -141,7 +141,8 @@ void TrackingPipeline::apply_correction(const LoopCorrection& c) {
     const KeyframePose* p = corrected(kf.id);
     if (p == nullptr) continue;
     const SE3 delta = p->T_w_k * kf.T_w_k.inverse();
-    if (!have_newest || kf.id > newest_id) newest_delta = delta, newest_id = kf.id, have_newest = true;
+    if (!have_newest || kf.id > newest_id)
+      newest_delta = delta, newest_id = kf.id, have_newest = true;
     if (&kf == reference_) reference_delta = delta, have_reference = true;
     kf.T_w_k = p->T_w_k;
   }
@@ -150,7 +151,8 @@ void TrackingPipeline::apply_correction(const LoopCorrection& c) {
   for (int i = 0; i < pool_->size(); ++i) {
     Keyframe& kf = pool_->at(i);
     if (kf.id > last_known) kf.T_w_k = newest_delta * kf.T_w_k;
-    if (&kf == reference_ && kf.id > last_known) reference_delta = newest_delta, have_reference = true;
+    if (&kf == reference_ && kf.id > last_known)
+      reference_delta = newest_delta, have_reference = true;
   }
   for (LocalMap& m : local_maps_) m.T_w_k = newest_delta * m.T_w_k;
   const SE3 before = T_w_last_;

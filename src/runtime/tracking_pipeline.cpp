@@ -140,8 +140,7 @@ void TrackingPipeline::accept(const Attempt& a, const SensorFrame& frame, PoseEs
   // authors' code, motion alone ends a keyframe only once its map is made: cut earlier, a far
   // scene loses the baseline its multi-view depth needs (synthetic wall at 6 m: 2-5 % depth
   // error instead of 0.2-0.9 %, and tracking on that map drifts).
-  const bool moved = r.parallax > params_.tracker.keyframe_parallax &&
-                     !pool_->pinned(a.kf);
+  const bool moved = r.parallax > params_.tracker.keyframe_parallax && !pool_->pinned(a.kf);
   const bool new_view = r.overlap < params_.tracker.keyframe_overlap || moved;
   if (new_view && !reuse_keyframe(a, frame.timestamp_ns, out) && this->frame().has_depth()) {
     start_keyframe(frame, out->T_w_c, out);

@@ -225,9 +225,10 @@ TEST(Allocations, NoneWhileRelocalisingOrClosingALoop) {
     const TrackingCounters& c = job.counters();
     EXPECT_GE(c.relocalised + c.loop_corrections, 1u) << mode << ": nothing exercised";
     EXPECT_EQ(calls, 0) << mode << ": " << g_bytes.load() << " bytes allocated after init";
-    std::printf("%s: %u relocalised, %u loop corrections, %u withheld; %ld allocations after "
-                "init\n",
-                mode, c.relocalised, c.loop_corrections, c.withheld, calls);
+    std::printf(
+        "%s: %u relocalised, %u loop corrections, %u withheld; %ld allocations after "
+        "init\n",
+        mode, c.relocalised, c.loop_corrections, c.withheld, calls);
   }
 }
 

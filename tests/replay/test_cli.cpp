@@ -117,5 +117,49 @@ TEST(Cli, CtrlCEndsAReplayWithCompleteOutputs) {
   EXPECT_EQ(static_cast<long long>(ply.size() - body_at - 11), count * 15);
 }
 
+TEST(Cli, TrainingAVocabularyTwiceGivesTheSameFile) {
+  const std::string dir = testing::make_temp_dir("cli_vocabulary");
+  for (const char* name : {"/a.voc", "/b.voc"}) {
+    const Outcome o = rgbdtam("vocabulary train " + clip() + " --config " + config() +
+                              " --every 5 --depth 3 --out " + dir + name);
+    ASSERT_EQ(o.exit_code, 0) << o.err;
+  }
+  const std::string a = read_all(dir + "/a.voc");
+  EXPECT_GT(a.size(), 1000u);
+  EXPECT_EQ(a, read_all(dir + "/b.voc"));
+  // The trained file is one a replay can use.
+  const Outcome o = rgbdtam("replay " + clip() + " --config " + config() +
+                            " --set loop.vocabulary=" + dir + "/a.voc --max-frames 5");
+  EXPECT_EQ(o.exit_code, 0) << o.err;
+}
+
+TEST(Cli, VocabularyProblemsAreClearErrors) {
+  Outcome o = rgbdtam("vocabulary train " + clip() + " --config " + config());
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_NE(o.err.find("needs at least one sequence, --config and --out"), std::string::npos)
+      << o.err;
+  o = rgbdtam("vocabulary train " + clip() + " --config " + config() + " --depth 0 --out x");
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_NE(o.err.find("--depth needs 1 to 8"), std::string::npos) << o.err;
+  const std::string dir = testing::make_temp_dir("cli_bad_vocabulary");
+  {
+    std::ofstream bad(dir + "/bad.voc");
+    bad << "RGBDVOC1 but not really";
+  }
+  o = rgbdtam("replay " + clip() + " --config " + config() + " --set loop.vocabulary=" + dir +
+              "/bad.voc");
+  EXPECT_EQ(o.exit_code, 1);
+  EXPECT_NE(o.err.find("bad.voc"), std::string::npos) << o.err;
+  o = rgbdtam("replay " + clip() + " --config " + config() + " --set loop.vocabulary=" + dir +
+              "/missing.voc");
+  EXPECT_EQ(o.exit_code, 1);
+  EXPECT_NE(o.err.find("missing.voc: cannot open"), std::string::npos) << o.err;
+  // A config that names none runs without loop closure, and says so.
+  o = rgbdtam("replay " + clip() + " --config " + config() +
+              " --set loop.vocabulary= --max-frames 3");
+  EXPECT_EQ(o.exit_code, 0) << o.err;
+  EXPECT_NE(o.err.find("no loop closure or relocalisation"), std::string::npos) << o.err;
+}
+
 }  // namespace
 }  // namespace rgbdtam

@@ -128,7 +128,8 @@ TEST(LoopModule, ASyntheticLoopWithKnownDriftIsFoundAndMostOfTheDriftRemoved) {
     kf.corrections_adopted = loop.counters().corrections;  // adopted at once, as in replay
     // Once corrected, the next keyframe continues from its corrected predecessor.
     if (loop.counters().corrections > 0 && i > 0) {
-      kf.T_w_k = store.in_order(store.size() - 1).T_w_k * (truth[i - 1].inverse() * truth[i]) * bias;
+      kf.T_w_k =
+          store.in_order(store.size() - 1).T_w_k * (truth[i - 1].inverse() * truth[i]) * bias;
       drifted = kf.T_w_k;
     }
     loop.step(kf);
@@ -137,14 +138,14 @@ TEST(LoopModule, ASyntheticLoopWithKnownDriftIsFoundAndMostOfTheDriftRemoved) {
   double drift_after = 0;
   for (int i = 0; i < store.size(); ++i) {
     const PlaceRecord& r = store.in_order(i);
-    drift_after = std::max(drift_after,
-                           (r.T_w_k.translation() - truth[r.keyframe_id].translation()).norm());
+    drift_after =
+        std::max(drift_after, (r.T_w_k.translation() - truth[r.keyframe_id].translation()).norm());
   }
   const LoopCounters& c = loop.counters();
-  std::printf("drift %.1f cm before, %.1f cm after; %u candidates, %u verified, %u loops, %u "
-              "corrections\n",
-              100 * drift_before, 100 * drift_after, c.candidates, c.verified, c.loops,
-              c.corrections);
+  std::printf(
+      "drift %.1f cm before, %.1f cm after; %u candidates, %u verified, %u loops, %u "
+      "corrections\n",
+      100 * drift_before, 100 * drift_after, c.candidates, c.verified, c.loops, c.corrections);
   EXPECT_GE(c.loops, 1u);
   EXPECT_GE(c.corrections, 1u);
   EXPECT_GT(drift_before, 0.05);
@@ -165,8 +166,9 @@ TEST(PlaceRecognition, UnrelatedPlacesAreRejected) {
   clip_params.camera = {517.3, 516.5, 318.6, 255.3, 640, 480};
   clip_params.distortion = {0.2624, -0.9531, -0.0054, 0.0026, 1.1633};
   TumReplaySource source;
-  ASSERT_TRUE(source.open(testing::source_path("data/tum_fr1_xyz_clip").c_str(), 640, 480,
-                          20'000'000, 20'000'000)
+  ASSERT_TRUE(source
+                  .open(testing::source_path("data/tum_fr1_xyz_clip").c_str(), 640, 480, 20'000'000,
+                        20'000'000)
                   .is_ok());
   Undistorter undistorter;
   undistorter.init(clip_params.camera, clip_params.distortion);
@@ -206,7 +208,8 @@ TEST(PlaceRecognition, UnrelatedPlacesAreRejected) {
       recognizer.describe(f.gray(0), f.inverse_depth(0), f.intrinsics(0), voc);
       PlaceRecord* r = store.begin_insert();
       r->keyframe_id = static_cast<uint32_t>(i);
-      for (const Feature& feature : recognizer.features()) ASSERT_TRUE(r->features.push_back(feature));
+      for (const Feature& feature : recognizer.features())
+        ASSERT_TRUE(r->features.push_back(feature));
       for (const BowEntry& e : recognizer.bow()) ASSERT_TRUE(r->bow.push_back(e));
       store.commit();
     }

@@ -255,7 +255,8 @@ TEST(RigidAlignment, HornRecoversAnExactMotion) {
 TEST(RigidAlignment, RansacIgnoresHalfTheMatchesBeingWrong) {
   const SE3 T(so3_exp(Vector3d(0.1, 0.2, -0.1)), Vector3d(0.1, 0.0, -0.3));
   auto pairs = pairs_under(T, 60);
-  for (int i = 0; i < 60; i += 2) pairs[static_cast<size_t>(i)].b += Vector3d(0.5, -0.3, 0.4 + 0.01 * i);
+  for (int i = 0; i < 60; i += 2)
+    pairs[static_cast<size_t>(i)].b += Vector3d(0.5, -0.3, 0.4 + 0.01 * i);
   std::vector<uint8_t> inlier(60);
   const RigidRansacResult r = rigid_ransac(pairs.data(), 60, RigidRansacOptions(), inlier.data());
   EXPECT_EQ(r.inliers, 30);
@@ -279,7 +280,8 @@ DriftingLoop drifting_loop() {
   d.drifted.push_back(d.truth[0]);
   for (int i = 0; i + 1 < n; ++i) {
     const SE3 bias(so3_exp(Vector3d(0, 0.5 * kDeg, 0)), Vector3d(0.005, 0, 0));
-    d.odometry.push_back(d.truth[static_cast<size_t>(i)].inverse() * d.truth[static_cast<size_t>(i) + 1] * bias);
+    d.odometry.push_back(d.truth[static_cast<size_t>(i)].inverse() *
+                         d.truth[static_cast<size_t>(i) + 1] * bias);
     d.drifted.push_back(d.drifted.back() * d.odometry.back());
   }
   return d;
@@ -288,7 +290,8 @@ DriftingLoop drifting_loop() {
 double worst_error_m(const PoseGraph& g, const std::vector<SE3>& truth) {
   double worst = 0;
   for (int i = 0; i < g.nodes(); ++i) {
-    worst = std::max(worst, (g.pose(i).translation() - truth[static_cast<size_t>(i)].translation()).norm());
+    worst = std::max(
+        worst, (g.pose(i).translation() - truth[static_cast<size_t>(i)].translation()).norm());
   }
   return worst;
 }
@@ -323,11 +326,13 @@ TEST(PoseGraph, AConsistentGraphDoesNotMove) {
   g.allocate(32, 64);
   for (const SE3& T : d.truth) g.add_node(T);
   for (int i = 0; i + 1 < g.nodes(); ++i) {
-    ASSERT_TRUE(g.add_edge(i, i + 1, d.truth[static_cast<size_t>(i)].inverse() * d.truth[static_cast<size_t>(i) + 1],
-                           Matrix6d::Identity()));
+    ASSERT_TRUE(g.add_edge(
+        i, i + 1, d.truth[static_cast<size_t>(i)].inverse() * d.truth[static_cast<size_t>(i) + 1],
+        Matrix6d::Identity()));
   }
   g.optimize(5);
-  for (int i = 0; i < g.nodes(); ++i) expect_close(g.pose(i), d.truth[static_cast<size_t>(i)], 1e-9, 1e-9);
+  for (int i = 0; i < g.nodes(); ++i)
+    expect_close(g.pose(i), d.truth[static_cast<size_t>(i)], 1e-9, 1e-9);
 }
 
 TEST(PoseGraph, AFullGraphRefusesMoreAndSaysSo) {

@@ -72,7 +72,8 @@ int replay(const std::string& sequence, const Params& params) {
   int segment = 0;
   while (job.step()) {
     const PoseEstimate& p = job.last_pose();
-    const bool restart = (p.flags & kReset) != 0 && (p.flags & (kRelocalised | kLoopCorrected)) == 0;
+    const bool restart =
+        (p.flags & kReset) != 0 && (p.flags & (kRelocalised | kLoopCorrected)) == 0;
     segment += restart ? 1 : 0;
     if ((p.flags & kNewKeyframe) != 0) keyframes.push_back({p.timestamp_ns, segment});
   }
@@ -197,8 +198,8 @@ int costs(const std::string& sequence, const Params& params) {
   std::unique_ptr<uint8_t[]> bytes;
   size_t size = 0;
   (void)read_binary_file(params.loop.vocabulary, size_t{256} << 20, &bytes, &size);
-  std::printf("vocabulary: %s, %zu bytes, %d words; load median %.1f ms\n",
-              params.loop.vocabulary, size, voc.words(), median(load_ms));
+  std::printf("vocabulary: %s, %zu bytes, %d words; load median %.1f ms\n", params.loop.vocabulary,
+              size, voc.words(), median(load_ms));
   // Features and bag of words per keyframe: every 20th frame of the sequence.
   TumReplaySource source;
   Status s = source.open(sequence.c_str(), params.camera.width_px, params.camera.height_px,
@@ -240,9 +241,10 @@ int costs(const std::string& sequence, const Params& params) {
   }
   double mean_features = 0;
   for (const auto& f : features) mean_features += f.size();
-  std::printf("features + bag of words per keyframe: median %.2f ms, %.0f features (%zu "
-              "keyframes)\n",
-              median(describe_ms), mean_features / features.size(), features.size());
+  std::printf(
+      "features + bag of words per keyframe: median %.2f ms, %.0f features (%zu "
+      "keyframes)\n",
+      median(describe_ms), mean_features / features.size(), features.size());
   // The store filled to capacity with the sequence's keyframes over and over; query and verify.
   for (int i = 0; i < store.capacity(); ++i) {
     const size_t k = static_cast<size_t>(i) % features.size();
@@ -270,15 +272,17 @@ int costs(const std::string& sequence, const Params& params) {
     (void)recognizer.verify(store.at_slot(m[0].slot), limits);
     verify_ms.push_back((monotonic_ns() - t1) * 1e-6);
   }
-  std::printf("query of %d places: median %.2f ms; one verification (match + RANSAC): median "
-              "%.2f ms\n",
-              store.capacity(), median(query_ms), median(verify_ms));
-  std::printf("pose graph, 10 Gauss-Newton steps: 32 keyframes %.2f ms, 256 %.2f ms, 1024 %.1f ms\n",
-              pose_graph_ms(32), pose_graph_ms(256), pose_graph_ms(1024));
-  std::printf("light store at capacity (%d places of %d features, with its index): %.1f MB\n",
-              params.loop.places, params.loop.features,
-              PlaceStore::bytes_needed(params.loop.places, params.loop.features, voc.words()) /
-                  1048576.0);
+  std::printf(
+      "query of %d places: median %.2f ms; one verification (match + RANSAC): median "
+      "%.2f ms\n",
+      store.capacity(), median(query_ms), median(verify_ms));
+  std::printf(
+      "pose graph, 10 Gauss-Newton steps: 32 keyframes %.2f ms, 256 %.2f ms, 1024 %.1f ms\n",
+      pose_graph_ms(32), pose_graph_ms(256), pose_graph_ms(1024));
+  std::printf(
+      "light store at capacity (%d places of %d features, with its index): %.1f MB\n",
+      params.loop.places, params.loop.features,
+      PlaceStore::bytes_needed(params.loop.places, params.loop.features, voc.words()) / 1048576.0);
   return 0;
 }
 

@@ -34,11 +34,11 @@ class PlaceDatabase {
     int32_t prev = -1, next = -1;  // neighbours in the word's list, entry indices
   };
   int places_ = 0, words_ = 0, per_place_ = 0;
-  std::unique_ptr<int32_t[]> head_;       // per word: first entry, -1 for none
-  std::unique_ptr<Entry[]> entries_;      // slot * per_place_ + i
-  std::unique_ptr<int32_t[]> count_;      // entries per slot
-  std::unique_ptr<float[]> score_;        // per slot, zero between queries
-  std::unique_ptr<int32_t[]> touched_;    // slots with a score in this query
+  std::unique_ptr<int32_t[]> head_;     // per word: first entry, -1 for none
+  std::unique_ptr<Entry[]> entries_;    // slot * per_place_ + i
+  std::unique_ptr<int32_t[]> count_;    // entries per slot
+  std::unique_ptr<float[]> score_;      // per slot, zero between queries
+  std::unique_ptr<int32_t[]> touched_;  // slots with a score in this query
 };
 
 }  // namespace rgbdtam

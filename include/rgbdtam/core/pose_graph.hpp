@@ -14,8 +14,8 @@
 namespace rgbdtam {
 
 struct PoseGraphStats {
-  int iterations = 0;        // Gauss-Newton steps taken
-  int cg_iterations = 0;     // over all steps
+  int iterations = 0;         // Gauss-Newton steps taken
+  int cg_iterations = 0;      // over all steps
   double initial_cost = 0.0;  // sum of e^T Omega e
   double final_cost = 0.0;
 };

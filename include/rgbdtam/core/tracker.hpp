@@ -66,7 +66,9 @@ struct Keyframe {
   const FixedVector<TrackPoint>& photometric(int level) const {
     return photometric_sets[active_photometric][level];
   }
-  FixedVector<TrackPoint>* inactive_photometric() { return photometric_sets[1 - active_photometric]; }
+  FixedVector<TrackPoint>* inactive_photometric() {
+    return photometric_sets[1 - active_photometric];
+  }
   void swap_photometric() { active_photometric = 1 - active_photometric; }
 };
 

@@ -43,12 +43,13 @@ struct Board {
   int gpio_led_line = -1;           // status LED, -1 = none
   int gpio_trigger_line = -1;       // frame trigger output to the sensor, -1 = none
 
-  ThreadPlacement tracker, mapper, link, sensor;
+  ThreadPlacement tracker, mapper, loop, link, sensor;
 
   // Capacity overrides on the params (0 = keep the params file's value).
   int keyframe_pool = 0;
   int map_queue_frames = 0;
   int map_seeds = 0;
+  int loop_places = 0;
 
   char directory[kTextBytes] = "";  // the board folder; relative paths in the file start here
 };

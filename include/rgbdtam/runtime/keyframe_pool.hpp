@@ -44,8 +44,8 @@ class KeyframePool {
   int slot_of(const Keyframe* kf) const;
 
   std::unique_ptr<Keyframe[]> slots_;
-  std::unique_ptr<uint64_t[]> age_;          // creation order per slot
-  std::unique_ptr<uint32_t[]> generation_;   // changes only while unpinned (tracker)
+  std::unique_ptr<uint64_t[]> age_;         // creation order per slot
+  std::unique_ptr<uint32_t[]> generation_;  // changes only while unpinned (tracker)
   std::unique_ptr<std::atomic<int>[]> pins_;
   std::unique_ptr<std::atomic<bool>[]> map_published_;
   int capacity_ = 0;

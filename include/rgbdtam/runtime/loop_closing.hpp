@@ -26,11 +26,11 @@ class CorrectionQueue : public SpscRing<LoopCorrection> {
 };
 
 struct LoopCounters {
-  uint32_t keyframes = 0;         // described and remembered
-  uint32_t candidates = 0;        // places verified in 3-D
-  uint32_t verified = 0;          // ... that passed
-  uint32_t loops = 0;             // verified and consistent: loop edges
-  uint32_t corrections = 0;       // loops that moved the map
+  uint32_t keyframes = 0;            // described and remembered
+  uint32_t candidates = 0;           // places verified in 3-D
+  uint32_t verified = 0;             // ... that passed
+  uint32_t loops = 0;                // verified and consistent: loop edges
+  uint32_t corrections = 0;          // loops that moved the map
   uint32_t corrections_dropped = 0;  // the tracker had not taken the previous one
 };
 

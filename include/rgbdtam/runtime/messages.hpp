@@ -35,7 +35,7 @@ enum PoseFlags : uint32_t {
   kKeyframeReused = 1u << 6,  // an earlier keyframe became the reference again (map reuse)
   kRelocalised = 1u << 7,     // lost, then found again in the map (with kReset)
   kLoopCorrected = 1u << 8,   // a loop closure moved the map (with kReset)
-  kSettling = 1u << 9,  // tracked, but withheld: too soon after a correction to compare poses
+  kSettling = 1u << 9,        // tracked, but withheld: too soon after a correction to compare poses
 };
 
 // Pipeline -> trajectory writer, link. One per input frame.
@@ -95,9 +95,9 @@ struct MapperFrame {
   int64_t timestamp_ns = 0;
   SE3 T_w_c;
   KeyframeHandle new_keyframe;  // set when this frame became a keyframe (pinned for the mapper)
-  ImageF gray;                       // level 0, undistorted, [0,1]
-  ImageF inverse_depth;              // level 0 sensor inverse depth; filled for keyframes only
-  ImageU8 edges;                     // level 0 Canny edges; filled for keyframes only
+  ImageF gray;                  // level 0, undistorted, [0,1]
+  ImageF inverse_depth;         // level 0 sensor inverse depth; filled for keyframes only
+  ImageU8 edges;                // level 0 Canny edges; filled for keyframes only
 };
 
 // Tracker (and firmware events) -> link task.

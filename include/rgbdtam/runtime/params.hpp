@@ -34,17 +34,17 @@ struct SensorModel {
 // Loop closure, relocalisation and map reuse (paper sec. VI).
 struct LoopParams {
   bool enabled = true;
-  bool threaded = false;   // the loop module on its own thread (replay: synchronous)
-  bool relocalise = true;  // look lost frames up in the places (else a restart waits for a loop)
+  bool threaded = false;      // the loop module on its own thread (replay: synchronous)
+  bool relocalise = true;     // look lost frames up in the places (else a restart waits for a loop)
   char vocabulary[128] = "";  // the vocabulary file, relative to the config file
-  int places = 1024;       // light records remembered (the oldest goes when full)
-  int features = 400;      // per keyframe
-  int queue_keyframes = 4;  // tracker -> loop module slots
+  int places = 1024;          // light records remembered (the oldest goes when full)
+  int features = 400;         // per keyframe
+  int queue_keyframes = 4;    // tracker -> loop module slots
   // A place of the same unbroken stretch is a loop candidate only this long after it was seen:
   // sooner, the tracker's own map still holds it.
   double min_age_s = 20.0;
-  int min_inliers = 40;         // 3-D matches a rigid motion must explain
-  int consistent_queries = 2;   // consecutive keyframes that must find the same place
+  int min_inliers = 40;        // 3-D matches a rigid motion must explain
+  int consistent_queries = 2;  // consecutive keyframes that must find the same place
   // A verified loop moves the map only when it disagrees with it by more than this.
   double min_correction_m = 0.02;
   double min_correction_rad = 1.0 * M_PI / 180.0;

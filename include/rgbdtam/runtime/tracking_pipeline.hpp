@@ -109,7 +109,7 @@ class TrackingPipeline {
   PlaceRecognizer relocaliser_;
   VerificationLimits relocalisation_limits_;
   uint32_t corrections_adopted_ = 0;
-  uint32_t pending_flags_ = 0;  // for the next output: a correction moved the map
+  uint32_t pending_flags_ = 0;     // for the next output: a correction moved the map
   int64_t withhold_until_ns_ = 0;  // poses up to this time are tracked but not reported valid
   uint32_t next_keyframe_id_ = 0;
   // The last valid pose and the camera's twist (v, omega per second) before it.
