@@ -9,10 +9,9 @@
 #include <vector>
 
 #include "config_files.hpp"
+#include "frontend_frames.hpp"
 #include "rgbdtam/core/features.hpp"
-#include "rgbdtam/core/pyramid.hpp"
 #include "rgbdtam/hal/file.hpp"
-#include "rgbdtam/hal/tum_replay_source.hpp"
 
 namespace rgbdtam {
 namespace {
@@ -38,31 +37,17 @@ bool parse_whole(const char* text, int lo, int hi, int* out) {
 // The descriptors of every `every`-th frame of one sequence, one image per entry.
 Status collect(const char* sequence, const Params& p, int every,
                std::vector<std::vector<Descriptor>>* images) {
-  TumReplaySource source;
-  RGBDTAM_RETURN_IF_ERROR(source.open(sequence, p.camera.width_px, p.camera.height_px,
-                                      p.sensor.max_rgb_depth_dt_ns, p.sensor.depth_time_offset_ns));
-  Undistorter undistorter;
-  undistorter.init(p.camera, p.distortion);
-  FramePyramid frame;
-  frame.allocate(p.camera, p.sensor.depth_factor, p.sensor.depth_range);
-  ImageU16 depth;
-  depth.allocate(p.camera.width_px, p.camera.height_px);
+  FrontendFrames frames;
+  RGBDTAM_RETURN_IF_ERROR(frames.open(sequence, p));
   FeatureExtractor extractor;
   FeatureOptions opt;
   opt.max_features = p.loop.features;
   extractor.allocate(p.camera.width_px, p.camera.height_px, opt);
   FixedVector<Feature> features;
   features.reserve_once(opt.max_features);
-  for (int i = 0; i < source.frame_count(); i += every) {
-    source.skip_to(i);
-    SensorFrame f;
-    Status warning;
-    const Status s = source.next(&f, &warning);
-    if (s.code() == StatusCode::kEndOfStream) break;
-    if (!s.is_ok() || f.depth == nullptr) continue;
-    undistorter.undistort_gray(f.gray, &frame.gray(0));
-    undistorter.undistort_depth(f.depth, &depth);
-    frame.build_inverse_depth(depth);
+  for (int i = 0; i < frames.count(); i += every) {
+    if (!frames.load(i)) continue;
+    const FramePyramid& frame = frames.frame();
     extractor.extract(frame.gray(0), frame.inverse_depth(0), frame.intrinsics(0), &features);
     std::vector<Descriptor> image;
     for (const Feature& feature : features) image.push_back(feature.descriptor);

@@ -59,8 +59,7 @@ Status LoopModule::init(const Params& params, const Vocabulary* vocabulary, Plac
   corrections_ = corrections;
   clock_ = clock;
   recognizer_.allocate(params);
-  limits_.min_inliers = params.loop.min_inliers;
-  limits_.inverse_depth_sigma = params.sensor.inverse_depth_sigma();
+  limits_ = VerificationLimits::of(params);
   graph_.allocate(params.loop.places, 2 * params.loop.places);
   loops_.reserve_once(params.loop.places);
   return Status::ok();

@@ -89,9 +89,10 @@ void PlaceRecognizer::describe(const ImageF& gray, const ImageF& inverse_depth,
   vocabulary.transform(features_, &bow_);
 }
 
-RigidRansacResult PlaceRecognizer::verify(const PlaceRecord& place,
+RigidRansacResult PlaceRecognizer::verify(const FixedVector<Feature>& query,
+                                          const PlaceRecord& place,
                                           const VerificationLimits& limits) {
-  const int n = match_features(features_, place.features, pairs_.get(), features_.capacity());
+  const int n = match_features(query, place.features, pairs_.get(), features_.capacity());
   RigidRansacOptions opt;
   opt.inverse_depth_sigma = limits.inverse_depth_sigma;
   opt.seed = place.keyframe_id + 1;

@@ -14,8 +14,7 @@ void TrackingPipeline::connect_loop(LoopQueue* keyframes, CorrectionQueue* corre
   places_ = places;
   vocabulary_ = vocabulary;
   relocaliser_.allocate(params_);
-  relocalisation_limits_.min_inliers = params_.loop.min_inliers;
-  relocalisation_limits_.inverse_depth_sigma = params_.sensor.inverse_depth_sigma();
+  relocalisation_limits_ = VerificationLimits::of(params_);
 }
 
 void TrackingPipeline::offer_to_loop(const Keyframe& kf, uint32_t reference_id,

@@ -6,10 +6,11 @@
 #include <vector>
 
 #include "config_files.hpp"
-#include "rgbdtam/hal/tum_replay_source.hpp"
+#include "frontend_frames.hpp"
 #include "rgbdtam/runtime/loop_closing.hpp"
 #include "synthetic_scene.hpp"
 #include "test_paths.hpp"
+#include "tum_writer.hpp"
 
 namespace rgbdtam {
 namespace {
@@ -30,15 +31,6 @@ const Vocabulary& shipped_vocabulary() {
     EXPECT_TRUE(loaded) << error.message();
   }
   return v;
-}
-
-Params synthetic_params(const testing::SyntheticScene& scene) {
-  Params p;
-  p.camera = scene.camera;
-  p.distortion = RadTanDistortion();
-  p.sensor.depth_factor = scene.depth_factor;
-  p.sensor.depth_range.max_m = 10.0;
-  return p;
 }
 
 // A view as the tracker hands it to the loop module.
@@ -91,7 +83,7 @@ TEST(PlaceStore, AFullStoreForgetsTheOldestAndItsHandlesGoStale) {
 // its odometry turns 1 degree too far and slides 1 cm at every step.
 TEST(LoopModule, ASyntheticLoopWithKnownDriftIsFoundAndMostOfTheDriftRemoved) {
   const testing::SyntheticScene scene;
-  Params p = synthetic_params(scene);
+  Params p = testing::synthetic_params(scene);
   p.loop.min_age_s = 4.0;
   const Vocabulary& voc = shipped_vocabulary();
   PlaceStore store;
@@ -152,72 +144,68 @@ TEST(LoopModule, ASyntheticLoopWithKnownDriftIsFoundAndMostOfTheDriftRemoved) {
   EXPECT_LT(drift_after, 0.5 * drift_before);
 }
 
+// A view described as the loop module describes a keyframe.
+struct DescribedView {
+  std::vector<Feature> features;
+  std::vector<BowEntry> bow;
+};
+
+DescribedView describe(PlaceRecognizer* recognizer, const FramePyramid& f, const Vocabulary& voc) {
+  recognizer->describe(f.gray(0), f.inverse_depth(0), f.intrinsics(0), voc);
+  return {{recognizer->features().begin(), recognizer->features().end()},
+          {recognizer->bow().begin(), recognizer->bow().end()}};
+}
+
+void remember(const DescribedView& v, uint32_t id, PlaceStore* store) {
+  PlaceRecord* r = store->begin_insert();
+  r->keyframe_id = id;
+  for (const Feature& f : v.features) ASSERT_TRUE(r->features.push_back(f));
+  for (const BowEntry& e : v.bow) ASSERT_TRUE(r->bow.push_back(e));
+  store->commit();
+}
+
 // Keyframes of the real clip against the synthetic room, both ways: no place of one is a
 // place of the other, so nothing may be verified.
 TEST(PlaceRecognition, UnrelatedPlacesAreRejected) {
   const testing::SyntheticScene scene;
-  Params p = synthetic_params(scene);
+  const Params p = testing::synthetic_params(scene);
   const Vocabulary& voc = shipped_vocabulary();
-  VerificationLimits limits;
-  limits.inverse_depth_sigma = p.sensor.inverse_depth_sigma();
+  const VerificationLimits limits = VerificationLimits::of(p);
+  PlaceRecognizer recognizer;
+  recognizer.allocate(p);
 
-  // The clip's frames, undistorted as the tracker sees them.
   Params clip_params;
-  clip_params.camera = {517.3, 516.5, 318.6, 255.3, 640, 480};
-  clip_params.distortion = {0.2624, -0.9531, -0.0054, 0.0026, 1.1633};
-  TumReplaySource source;
-  ASSERT_TRUE(source
-                  .open(testing::source_path("data/tum_fr1_xyz_clip").c_str(), 640, 480, 20'000'000,
-                        20'000'000)
+  ASSERT_TRUE(read_params_file(testing::source_path("config/tum_fr1.conf").c_str(), &clip_params)
                   .is_ok());
-  Undistorter undistorter;
-  undistorter.init(clip_params.camera, clip_params.distortion);
-  std::vector<std::unique_ptr<FramePyramid>> clip;
-  ImageU16 depth;
-  depth.allocate(640, 480);
-  for (int i = 0; i < source.frame_count(); i += 7) {
-    source.skip_to(i);
-    SensorFrame f;
-    Status warning;
-    ASSERT_TRUE(source.next(&f, &warning).is_ok());
-    ASSERT_NE(f.depth, nullptr);
-    auto frame = std::make_unique<FramePyramid>();
-    frame->allocate(clip_params.camera, 5000.0, DepthRange{0.3, 5.0});
-    undistorter.undistort_gray(f.gray, &frame->gray(0));
-    undistorter.undistort_depth(f.depth, &depth);
-    frame->build_inverse_depth(depth);
-    clip.push_back(std::move(frame));
+  FrontendFrames frames;
+  ASSERT_TRUE(frames.open(testing::source_path("data/tum_fr1_xyz_clip").c_str(), clip_params)
+                  .is_ok());
+  std::vector<DescribedView> clip, room;
+  for (int i = 0; i < frames.count(); i += 7) {
+    ASSERT_TRUE(frames.load(i));
+    clip.push_back(describe(&recognizer, frames.frame(), voc));
   }
-  std::vector<std::unique_ptr<FramePyramid>> room;
+  FramePyramid frame;
+  frame.allocate(scene.camera, scene.depth_factor, DepthRange{0.3, 10.0});
   for (int i = 0; i < 8; ++i) {
-    auto frame = std::make_unique<FramePyramid>();
-    frame->allocate(scene.camera, scene.depth_factor, DepthRange{0.3, 10.0});
-    render_into(scene, testing::SyntheticScene::pose_at(0.3 * i), frame.get());
-    room.push_back(std::move(frame));
+    render_into(scene, testing::SyntheticScene::pose_at(0.3 * i), &frame);
+    room.push_back(describe(&recognizer, frame, voc));
   }
 
   int checked = 0;
-  auto expect_none_verified = [&](const std::vector<std::unique_ptr<FramePyramid>>& places,
-                                  const std::vector<std::unique_ptr<FramePyramid>>& queries) {
+  auto expect_none_verified = [&](const std::vector<DescribedView>& places,
+                                  const std::vector<DescribedView>& queries) {
     PlaceStore store;
     store.allocate(16, p.loop.features, voc.words());
-    PlaceRecognizer recognizer;
-    recognizer.allocate(p);
-    for (size_t i = 0; i < places.size(); ++i) {
-      const FramePyramid& f = *places[i];
-      recognizer.describe(f.gray(0), f.inverse_depth(0), f.intrinsics(0), voc);
-      PlaceRecord* r = store.begin_insert();
-      r->keyframe_id = static_cast<uint32_t>(i);
-      for (const Feature& feature : recognizer.features())
-        ASSERT_TRUE(r->features.push_back(feature));
-      for (const BowEntry& e : recognizer.bow()) ASSERT_TRUE(r->bow.push_back(e));
-      store.commit();
-    }
-    for (const auto& q : queries) {
-      recognizer.describe(q->gray(0), q->inverse_depth(0), q->intrinsics(0), voc);
+    for (size_t i = 0; i < places.size(); ++i) remember(places[i], static_cast<uint32_t>(i), &store);
+    FixedVector<Feature> features;
+    features.reserve_once(p.loop.features);
+    for (const DescribedView& q : queries) {
+      features.clear();
+      for (const Feature& f : q.features) ASSERT_TRUE(features.push_back(f));
       for (int i = 0; i < store.size(); ++i) {
-        const RigidRansacResult fit = recognizer.verify(store.in_order(i), limits);
-        EXPECT_EQ(fit.inliers, 0) << "a wrong place passed";
+        EXPECT_EQ(recognizer.verify(features, store.in_order(i), limits).inliers, 0)
+            << "a wrong place passed";
         ++checked;
       }
     }
@@ -226,15 +214,14 @@ TEST(PlaceRecognition, UnrelatedPlacesAreRejected) {
   expect_none_verified(clip, room);
   EXPECT_EQ(checked, 2 * static_cast<int>(room.size() * clip.size()));
   // ... while a place does find itself again, so the rejections mean something.
-  PlaceRecognizer recognizer;
-  recognizer.allocate(p);
   PlaceStore store;
   store.allocate(2, p.loop.features, voc.words());
-  recognizer.describe(clip[0]->gray(0), clip[0]->inverse_depth(0), clip[0]->intrinsics(0), voc);
-  PlaceRecord* r = store.begin_insert();
-  for (const Feature& feature : recognizer.features()) ASSERT_TRUE(r->features.push_back(feature));
-  store.commit();
-  recognizer.describe(clip[1]->gray(0), clip[1]->inverse_depth(0), clip[1]->intrinsics(0), voc);
+  remember(clip[0], 0, &store);
+  ASSERT_TRUE(frames.open(testing::source_path("data/tum_fr1_xyz_clip").c_str(), clip_params)
+                  .is_ok());
+  ASSERT_TRUE(frames.load(3));
+  recognizer.describe(frames.frame().gray(0), frames.frame().inverse_depth(0),
+                      frames.frame().intrinsics(0), voc);
   EXPECT_GE(recognizer.verify(store.in_order(0), limits).inliers, limits.min_inliers);
 }
 

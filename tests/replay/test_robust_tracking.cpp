@@ -8,20 +8,11 @@
 #include "rgbdtam/runtime/tracking_pipeline.hpp"
 #include "stress_variants.hpp"
 #include "synthetic_scene.hpp"
+#include "tum_writer.hpp"
 #include "test_paths.hpp"
 
 namespace rgbdtam {
 namespace {
-
-Params synthetic_params(const testing::SyntheticScene& scene) {
-  Params p;
-  p.camera = scene.camera;
-  p.distortion = RadTanDistortion();
-  p.sensor.depth_factor = scene.depth_factor;
-  p.sensor.depth_range.max_m = 10.0;
-  p.sensor.disparity_sigma_px = 0.1;  // the synthetic sensor is exact
-  return p;
-}
 
 struct Verdicts {
   int valid = 0, lost = 0;
@@ -35,7 +26,7 @@ Verdicts track_and_judge(const testing::SyntheticScene& scene,
                          std::vector<PoseEstimate>* poses = nullptr) {
   KeyframePool keyframes;
   TrackingPipeline pipeline;
-  EXPECT_TRUE(pipeline.init(synthetic_params(scene), &keyframes).is_ok());
+  EXPECT_TRUE(pipeline.init(testing::synthetic_params(scene), &keyframes).is_ok());
   Verdicts v;
   for (size_t i = 0; i < frames.size(); ++i) {
     const PoseEstimate pose =

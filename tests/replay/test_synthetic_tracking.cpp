@@ -5,20 +5,14 @@
 
 #include "rgbdtam/runtime/tracking_pipeline.hpp"
 #include "synthetic_scene.hpp"
+#include "tum_writer.hpp"
 
 namespace rgbdtam {
 namespace {
 
 Params synthetic_params(const testing::SyntheticScene& scene, const char* residuals) {
-  Params p;
-  p.camera = scene.camera;
-  p.distortion = RadTanDistortion();
-  p.sensor.depth_factor = scene.depth_factor;
-  p.sensor.depth_range.max_m = 10.0;
+  Params p = testing::synthetic_params(scene);
   EXPECT_TRUE(ResidualConfig::parse(residuals, &p.tracker.residuals));
-  // The synthetic sensor is exact, so its disparity noise is the matcher's own 0.1 px, not the
-  // effective 0.4 px that covers a real Kinect's registration and timing errors.
-  p.sensor.disparity_sigma_px = 0.1;
   return p;
 }
 

@@ -7,11 +7,17 @@
 namespace rgbdtam {
 namespace {
 
-TEST(KeyframePool, RecyclesTheOldestFreeKeyframeWhenFull) {
+class KeyframePoolTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    builder.allocate(PinholeIntrinsics{50, 50, 31.5, 23.5, 64, 48}, TrackerOptions());
+    pool.allocate(3, builder, 16);
+  }
   KeyframeBuilder builder;
-  builder.allocate(PinholeIntrinsics{50, 50, 31.5, 23.5, 64, 48}, TrackerOptions());
   KeyframePool pool;
-  pool.allocate(3, builder, 16);
+};
+
+TEST_F(KeyframePoolTest, RecyclesTheOldestFreeKeyframeWhenFull) {
   Keyframe* a = pool.acquire(nullptr);
   Keyframe* b = pool.acquire(a);
   Keyframe* c = pool.acquire(b);
@@ -34,11 +40,7 @@ TEST(KeyframePool, RecyclesTheOldestFreeKeyframeWhenFull) {
   pool.unpin(pinned);
 }
 
-TEST(KeyframePool, AHandleToARecycledKeyframeReadsAsGone) {
-  KeyframeBuilder builder;
-  builder.allocate(PinholeIntrinsics{50, 50, 31.5, 23.5, 64, 48}, TrackerOptions());
-  KeyframePool pool;
-  pool.allocate(3, builder, 16);
+TEST_F(KeyframePoolTest, AHandleToARecycledKeyframeReadsAsGone) {
   Keyframe* a = pool.acquire(nullptr);
   const KeyframeHandle h = pool.handle(a);
   EXPECT_EQ(pool.get(h), a);
@@ -49,11 +51,7 @@ TEST(KeyframePool, AHandleToARecycledKeyframeReadsAsGone) {
   EXPECT_EQ(pool.get(pool.handle(a)), a);
 }
 
-TEST(KeyframePool, APublishedMapIsAdoptedOnceBetweenFrames) {
-  KeyframeBuilder builder;
-  builder.allocate(PinholeIntrinsics{50, 50, 31.5, 23.5, 64, 48}, TrackerOptions());
-  KeyframePool pool;
-  pool.allocate(3, builder, 16);
+TEST_F(KeyframePoolTest, APublishedMapIsAdoptedOnceBetweenFrames) {
   Keyframe* a = pool.acquire(nullptr);
   EXPECT_FALSE(pool.adopt_map(a));
   const FixedVector<TrackPoint>* before = &a->photometric(0);

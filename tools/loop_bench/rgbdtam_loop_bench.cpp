@@ -16,6 +16,7 @@
 
 #include "config_files.hpp"
 #include "evaluate_command.hpp"
+#include "frontend_frames.hpp"
 #include "replay_job.hpp"
 #include "rgbdtam/core/pose_graph.hpp"
 #include "rgbdtam/hal/clock.hpp"
@@ -201,19 +202,12 @@ int costs(const std::string& sequence, const Params& params) {
   std::printf("vocabulary: %s, %zu bytes, %d words; load median %.1f ms\n", params.loop.vocabulary,
               size, voc.words(), median(load_ms));
   // Features and bag of words per keyframe: every 20th frame of the sequence.
-  TumReplaySource source;
-  Status s = source.open(sequence.c_str(), params.camera.width_px, params.camera.height_px,
-                         params.sensor.max_rgb_depth_dt_ns, params.sensor.depth_time_offset_ns);
+  FrontendFrames frames;
+  const Status s = frames.open(sequence.c_str(), params);
   if (!s.is_ok()) {
     std::fprintf(stderr, "rgbdtam-loop-bench: %s\n", s.message());
     return 1;
   }
-  Undistorter undistorter;
-  undistorter.init(params.camera, params.distortion);
-  FramePyramid frame;
-  frame.allocate(params.camera, params.sensor.depth_factor, params.sensor.depth_range);
-  ImageU16 depth;
-  depth.allocate(params.camera.width_px, params.camera.height_px);
   PlaceRecognizer recognizer;
   recognizer.allocate(params);
   PlaceStore store;
@@ -221,14 +215,9 @@ int costs(const std::string& sequence, const Params& params) {
   std::vector<double> describe_ms;
   std::vector<std::vector<Feature>> features;
   std::vector<std::vector<BowEntry>> bows;
-  for (int i = 0; i < source.frame_count(); i += 20) {
-    source.skip_to(i);
-    SensorFrame f;
-    Status warning;
-    if (!source.next(&f, &warning).is_ok() || f.depth == nullptr) continue;
-    undistorter.undistort_gray(f.gray, &frame.gray(0));
-    undistorter.undistort_depth(f.depth, &depth);
-    frame.build_inverse_depth(depth);
+  for (int i = 0; i < frames.count(); i += 20) {
+    if (!frames.load(i)) continue;
+    const FramePyramid& frame = frames.frame();
     const int64_t t0 = monotonic_ns();
     recognizer.describe(frame.gray(0), frame.inverse_depth(0), frame.intrinsics(0), voc);
     describe_ms.push_back((monotonic_ns() - t0) * 1e-6);
@@ -255,9 +244,7 @@ int costs(const std::string& sequence, const Params& params) {
     store.commit();
   }
   std::vector<double> query_ms, verify_ms;
-  VerificationLimits limits;
-  limits.min_inliers = params.loop.min_inliers;
-  limits.inverse_depth_sigma = params.sensor.inverse_depth_sigma();
+  const VerificationLimits limits = VerificationLimits::of(params);
   BowVector bow;
   bow.reserve_once(params.loop.features);
   for (size_t k = 0; k < bows.size(); ++k) {

@@ -93,6 +93,16 @@ bool write_synthetic_sequence(const std::string& dir, const SyntheticScene& scen
   return ok;
 }
 
+Params synthetic_params(const SyntheticScene& scene) {
+  Params p;
+  p.camera = scene.camera;
+  p.distortion = RadTanDistortion();
+  p.sensor.depth_factor = scene.depth_factor;
+  p.sensor.depth_range.max_m = 10.0;
+  p.sensor.disparity_sigma_px = 0.1;
+  return p;
+}
+
 std::string synthetic_config(const SyntheticScene& s) {
   char buf[512];
   std::snprintf(buf, sizeof(buf),

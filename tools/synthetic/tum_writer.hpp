@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "rgbdtam/runtime/params.hpp"
 #include "synthetic_scene.hpp"
 
 namespace rgbdtam::testing {
@@ -17,6 +18,10 @@ bool write_png_gray16(const std::string& path, int w, int h, const uint16_t* px)
 // rgb.txt, depth.txt, groundtruth.txt, camera-to-world). Depth is stamped 5 ms after colour.
 bool write_synthetic_sequence(const std::string& dir, const SyntheticScene& scene, int frames,
                               double fps);
+// Parameters matching the scene's camera and its exact sensor, whose disparity noise is the
+// matcher's own 0.1 px, not the effective 0.4 px that covers a real Kinect's registration and
+// timing errors.
+Params synthetic_params(const SyntheticScene& scene);
 // The config text matching the scene's camera.
 std::string synthetic_config(const SyntheticScene& scene);
 bool write_text(const std::string& path, const std::string& text);

@@ -74,6 +74,9 @@ class PlaceStore {
 struct VerificationLimits {
   int min_inliers = 40;
   double inverse_depth_sigma = 0.01;  // the sensor's, for the inlier threshold
+  static VerificationLimits of(const Params& p) {
+    return {p.loop.min_inliers, p.sensor.inverse_depth_sigma()};
+  }
 };
 
 // Describes one view (features, bag of words) and verifies it against remembered places.
@@ -86,7 +89,12 @@ class PlaceRecognizer {
   const BowVector& bow() const { return bow_; }
   // Descriptor matches lifted to 3-D, RANSAC with Horn's closed form: T_b_a is the place's
   // keyframe from this view. inliers = 0 when it does not fit.
-  RigidRansacResult verify(const PlaceRecord& place, const VerificationLimits& limits);
+  RigidRansacResult verify(const PlaceRecord& place, const VerificationLimits& limits) {
+    return verify(features_, place, limits);
+  }
+  // The same for other features than the described view's (at most loop.features).
+  RigidRansacResult verify(const FixedVector<Feature>& query, const PlaceRecord& place,
+                           const VerificationLimits& limits);
 
  private:
   FeatureExtractor extractor_;

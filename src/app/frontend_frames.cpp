@@ -1,0 +1,27 @@
+#include "frontend_frames.hpp"
+
+namespace rgbdtam {
+
+Status FrontendFrames::open(const char* sequence, const Params& p) {
+  RGBDTAM_RETURN_IF_ERROR(source_.open(sequence, p.camera.width_px, p.camera.height_px,
+                                       p.sensor.max_rgb_depth_dt_ns,
+                                       p.sensor.depth_time_offset_ns));
+  undistorter_.init(p.camera, p.distortion);
+  frame_.allocate(p.camera, p.sensor.depth_factor, p.sensor.depth_range);
+  depth_.allocate(p.camera.width_px, p.camera.height_px);
+  return Status::ok();
+}
+
+bool FrontendFrames::load(int i) {
+  if (i < source_.position()) return false;  // the source only goes forwards
+  source_.skip_to(i);
+  SensorFrame f;
+  Status warning;
+  if (!source_.next(&f, &warning).is_ok() || f.depth == nullptr) return false;
+  undistorter_.undistort_gray(f.gray, &frame_.gray(0));
+  undistorter_.undistort_depth(f.depth, &depth_);
+  frame_.build_inverse_depth(depth_);
+  return true;
+}
+
+}  // namespace rgbdtam
