@@ -175,11 +175,11 @@ TEST(PlaceRecognition, UnrelatedPlacesAreRejected) {
   recognizer.allocate(p);
 
   Params clip_params;
-  ASSERT_TRUE(read_params_file(testing::source_path("config/tum_fr1.conf").c_str(), &clip_params)
-                  .is_ok());
+  ASSERT_TRUE(
+      read_params_file(testing::source_path("config/tum_fr1.conf").c_str(), &clip_params).is_ok());
   FrontendFrames frames;
-  ASSERT_TRUE(frames.open(testing::source_path("data/tum_fr1_xyz_clip").c_str(), clip_params)
-                  .is_ok());
+  ASSERT_TRUE(
+      frames.open(testing::source_path("data/tum_fr1_xyz_clip").c_str(), clip_params).is_ok());
   std::vector<DescribedView> clip, room;
   for (int i = 0; i < frames.count(); i += 7) {
     ASSERT_TRUE(frames.load(i));
@@ -197,7 +197,8 @@ TEST(PlaceRecognition, UnrelatedPlacesAreRejected) {
                                   const std::vector<DescribedView>& queries) {
     PlaceStore store;
     store.allocate(16, p.loop.features, voc.words());
-    for (size_t i = 0; i < places.size(); ++i) remember(places[i], static_cast<uint32_t>(i), &store);
+    for (size_t i = 0; i < places.size(); ++i)
+      remember(places[i], static_cast<uint32_t>(i), &store);
     FixedVector<Feature> features;
     features.reserve_once(p.loop.features);
     for (const DescribedView& q : queries) {
@@ -217,8 +218,8 @@ TEST(PlaceRecognition, UnrelatedPlacesAreRejected) {
   PlaceStore store;
   store.allocate(2, p.loop.features, voc.words());
   remember(clip[0], 0, &store);
-  ASSERT_TRUE(frames.open(testing::source_path("data/tum_fr1_xyz_clip").c_str(), clip_params)
-                  .is_ok());
+  ASSERT_TRUE(
+      frames.open(testing::source_path("data/tum_fr1_xyz_clip").c_str(), clip_params).is_ok());
   ASSERT_TRUE(frames.load(3));
   recognizer.describe(frames.frame().gray(0), frames.frame().inverse_depth(0),
                       frames.frame().intrinsics(0), voc);

@@ -8,8 +8,8 @@
 #include "rgbdtam/runtime/tracking_pipeline.hpp"
 #include "stress_variants.hpp"
 #include "synthetic_scene.hpp"
-#include "tum_writer.hpp"
 #include "test_paths.hpp"
+#include "tum_writer.hpp"
 
 namespace rgbdtam {
 namespace {

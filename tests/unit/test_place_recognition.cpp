@@ -46,10 +46,6 @@ void render_view(const SE3& T_w_c, View* v, int max_features = 400) {
 
 SE3 start_pose() { return testing::SyntheticScene::pose_at(0.0); }
 
-SE3 turned(const SE3& T, const Vector3d& axis_angle, const Vector3d& t) {
-  return T * SE3(so3_exp(axis_angle), t);
-}
-
 // T_b_a from a's view to b's, estimated by matching their features.
 RigidRansacResult align(const View& a, const View& b, int* matches) {
   std::vector<PointPair> pairs(static_cast<size_t>(a.features.size()));
@@ -87,36 +83,34 @@ TEST(Features, TheSameViewGivesTheSameFeatures) {
   }
 }
 
-TEST(Features, MatchesRecoverTheMotionBetweenTwoViews) {
+// Views from the start pose and from it moved by `motion`: their matches, aligned by RANSAC,
+// give back the motion.
+void expect_views_align(const SE3& motion, int min_inliers) {
   const SE3 T_w_a = start_pose();
-  const SE3 T_w_b = turned(T_w_a, Vector3d(0.02, -0.05, 0.01), Vector3d(0.08, 0.03, -0.05));
+  const SE3 T_w_b = T_w_a * motion;
   View a, b;
   render_view(T_w_a, &a);
   render_view(T_w_b, &b);
   int matches = 0;
   const RigidRansacResult r = align(a, b, &matches);
-  EXPECT_GE(r.inliers, 60) << matches << " matches";
+  EXPECT_GE(r.inliers, min_inliers) << matches << " matches";
   expect_close(r.T_b_a, T_w_b.inverse() * T_w_a, 0.01, 0.5 * kDeg);
+}
+
+TEST(Features, MatchesRecoverTheMotionBetweenTwoViews) {
+  expect_views_align(SE3(so3_exp(Vector3d(0.02, -0.05, 0.01)), Vector3d(0.08, 0.03, -0.05)), 60);
 }
 
 TEST(Features, AThirtyDegreeRollStillMatches) {
   // The descriptor turns with the corner's orientation.
-  const SE3 T_w_a = start_pose();
-  const SE3 T_w_b = turned(T_w_a, Vector3d(0, 0, 30 * kDeg), Vector3d::Zero());
-  View a, b;
-  render_view(T_w_a, &a);
-  render_view(T_w_b, &b);
-  int matches = 0;
-  const RigidRansacResult r = align(a, b, &matches);
-  EXPECT_GE(r.inliers, 40) << matches << " matches";
-  expect_close(r.T_b_a, T_w_b.inverse() * T_w_a, 0.01, 0.5 * kDeg);
+  expect_views_align(SE3(so3_exp(Vector3d(0, 0, 30 * kDeg)), Vector3d::Zero()), 40);
 }
 
 std::vector<std::vector<Descriptor>> training_images() {
   std::vector<std::vector<Descriptor>> images;
   for (int i = 0; i < 4; ++i) {
     View v;
-    render_view(turned(start_pose(), Vector3d(0, 0.1 * i, 0), Vector3d(0.1 * i, 0, 0)), &v);
+    render_view(start_pose() * SE3(so3_exp(Vector3d(0, 0.1 * i, 0)), Vector3d(0.1 * i, 0, 0)), &v);
     std::vector<Descriptor> d;
     for (const Feature& f : v.features) d.push_back(f.descriptor);
     images.push_back(d);
