@@ -87,9 +87,14 @@ bool LoopModule::detect(const LoopKeyframe& query, Found* found) {
   PlaceMatch matches[kCandidates];
   PlaceMatchEvent events[kCandidates];
   int verified = 0;
-  // Only this thread writes the store, so it reads without the lock.
-  const int n =
-      store_->database().query(recognizer_.bow(), is_loop_candidate, &filter, matches, kCandidates);
+  int n = 0;
+  {
+    // A query uses the database's scratch, which a relocalising tracker uses too. The records
+    // themselves only this thread writes, so it reads them without the lock.
+    std::lock_guard<std::mutex> lock(store_->mutex());
+    n = store_->database().query(recognizer_.bow(), is_loop_candidate, &filter, matches,
+                                 kCandidates);
+  }
   for (int i = 0; i < n && matches[i].score >= kMinRelativeScore * matches[0].score; ++i) {
     const PlaceRecord& place = store_->at_slot(matches[i].slot);
     ++counters_.candidates;

@@ -121,6 +121,9 @@ void TrackingPipeline::adopt_corrections() {
 }
 
 void TrackingPipeline::apply_correction(const LoopCorrection& c) {
+  // Counted as taken even when none of it applies here: the loop module corrects the keyframes
+  // it receives by what the tracker has taken.
+  ++corrections_adopted_;
   if (c.poses.empty()) return;
   auto corrected = [&](uint32_t id) -> const KeyframePose* {
     const KeyframePose* p =
@@ -163,7 +166,6 @@ void TrackingPipeline::apply_correction(const LoopCorrection& c) {
       so3_log(jump.quaternion()).norm() > params_.loop.max_reported_jump_rad) {
     withhold_until_ns_ = last_ns_ + params_.reset_after_lost_ns;
   }
-  ++corrections_adopted_;
   ++reset_counter_;
   ++counters_.loop_corrections;
   pending_flags_ |= kLoopCorrected | kReset;

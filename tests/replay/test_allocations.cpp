@@ -1,7 +1,5 @@
-// No heap allocation after init: replays the committed clip while counting every call to
-// malloc, calloc, realloc and the aligned allocators (through the linker's --wrap, which in a
-// static link also reaches libc's, libstdc++'s, libpng's and zlib's own calls) and every
-// operator new.
+// No heap allocation after init: replays the committed clip, runs the firmware, the recorder
+// and a V4L2 sensor while counting every allocation (allocation_counting.hpp).
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -21,111 +19,10 @@
 #include "stress_variants.hpp"
 #include "test_paths.hpp"
 
-namespace {
-std::atomic<bool> g_armed{false};
-std::atomic<long> g_calls{0};
-std::atomic<long> g_bytes{0};
-void* volatile g_escape = nullptr;  // keeps the self-check's allocations from being elided
-
-void note(size_t n) {
-  if (g_armed.load(std::memory_order_relaxed)) {
-    g_calls.fetch_add(1);
-    g_bytes.fetch_add(static_cast<long>(n));
-  }
-}
-}  // namespace
-
-extern "C" {
-void* __real_malloc(size_t);
-void* __real_calloc(size_t, size_t);
-void* __real_realloc(void*, size_t);
-void* __real_aligned_alloc(size_t, size_t);
-int __real_posix_memalign(void**, size_t, size_t);
-void* __real_memalign(size_t, size_t);
-void* __wrap_malloc(size_t n) {
-  note(n);
-  return __real_malloc(n);
-}
-void* __wrap_calloc(size_t c, size_t n) {
-  note(c * n);
-  return __real_calloc(c, n);
-}
-void* __wrap_realloc(void* p, size_t n) {
-  note(n);
-  return __real_realloc(p, n);
-}
-void* __wrap_aligned_alloc(size_t a, size_t n) {
-  note(n);
-  return __real_aligned_alloc(a, n);
-}
-int __wrap_posix_memalign(void** p, size_t a, size_t n) {
-  note(n);
-  return __real_posix_memalign(p, a, n);
-}
-void* __wrap_memalign(size_t a, size_t n) {
-  note(n);
-  return __real_memalign(a, n);
-}
-}
-
-void* operator new(size_t n) {
-  note(n);
-  void* p = __real_malloc(n == 0 ? 1 : n);
-  if (p == nullptr) throw std::bad_alloc();
-  return p;
-}
-void* operator new[](size_t n) { return operator new(n); }
-void* operator new(size_t n, const std::nothrow_t&) noexcept {
-  note(n);
-  return __real_malloc(n == 0 ? 1 : n);
-}
-void* operator new[](size_t n, const std::nothrow_t& t) noexcept { return operator new(n, t); }
-// The replacement operator new above allocates with malloc, so free is the matching release;
-// GCC 12 (aarch64, once inlined into a vector's destructor) cannot see through the replacement.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmismatched-new-delete"
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, size_t) noexcept { std::free(p); }
-void operator delete[](void* p, size_t) noexcept { std::free(p); }
-#pragma GCC diagnostic pop
+#include "allocation_counting.hpp"
 
 namespace rgbdtam {
 namespace {
-
-// Replays a sequence (the committed clip unless given) with the given config overrides,
-// counting allocations from the end of init to the end of the run (mapper thread joined).
-// Returns the count.
-long count_allocations_after_init(std::initializer_list<const char*> overrides, ReplayJob* job,
-                                  std::string seq = std::string()) {
-  ReplayOptions opt;
-  const bool clip = seq.empty();
-  if (clip) seq = testing::source_path("data/tum_fr1_xyz_clip");
-  const std::string config = testing::source_path("config/tum_fr1.conf");
-  const std::string trajectory = testing::make_temp_dir("alloc") + "/trajectory.txt";
-  opt.sequence = seq.c_str();
-  opt.trajectory_path = trajectory.c_str();
-  opt.progress = false;
-  char* text = nullptr;
-  EXPECT_TRUE(read_text_file(config.c_str(), 1 << 20, &text).is_ok());
-  EXPECT_TRUE(parse_params(text, config.c_str(), &opt.params).is_ok());
-  delete[] text;
-  for (const char* o : overrides) EXPECT_TRUE(set_param(o, "test", &opt.params).is_ok()) << o;
-  EXPECT_TRUE(job->init(opt).is_ok());
-  g_calls = 0;
-  g_bytes = 0;
-  g_armed = true;  // init is complete: from here on, nothing may allocate
-  int frames = 0;
-  while (job->step()) ++frames;
-  EXPECT_TRUE(job->finish().is_ok());
-  g_armed = false;
-  if (clip) {
-    EXPECT_EQ(frames, 50);
-    EXPECT_EQ(job->counters().tracked, 50u);
-  }
-  EXPECT_GT(job->counters().keyframes, 1u) << "keyframe creation must be part of the counted run";
-  return g_calls.load();
-}
 
 TEST(Allocations, CounterSeesAllocations) {
   // Without this, a zero below would prove nothing.
@@ -210,26 +107,6 @@ TEST(Allocations, NoneWhileRecoveringFromAKidnappedFrame) {
       "kidnapped frame: %u frames, %u retried (%u recovered from guesses, %u against the "
       "last valid frame), %u lost; %ld allocations after init\n",
       c.frames, c.retried, c.recovered_by_guesses, c.recovered_by_last_frame, c.lost, calls);
-}
-
-TEST(Allocations, NoneWhileRelocalisingOrClosingALoop) {
-  // fr1_xyz with 100 frames cut: relocalised at once; or, without relocalisation, restarted and
-  // joined to the map by a loop closure (pose graph, correction adopted, poses withheld).
-  const std::string seq = testing::full_fr1_xyz();
-  if (seq.empty()) GTEST_SKIP() << "full fr1_xyz not present on this machine";
-  const std::string dir = testing::make_temp_dir("alloc_loop");
-  ASSERT_TRUE(testing::cut_frames(seq, dir + "/cut", 300, 100));
-  for (const char* mode : {"loop.relocalise=true", "loop.relocalise=false"}) {
-    ReplayJob job;
-    const long calls = count_allocations_after_init({mode}, &job, dir + "/cut");
-    const TrackingCounters& c = job.counters();
-    EXPECT_GE(c.relocalised + c.loop_corrections, 1u) << mode << ": nothing exercised";
-    EXPECT_EQ(calls, 0) << mode << ": " << g_bytes.load() << " bytes allocated after init";
-    std::printf(
-        "%s: %u relocalised, %u loop corrections, %u withheld; %ld allocations after "
-        "init\n",
-        mode, c.relocalised, c.loop_corrections, c.withheld, calls);
-  }
 }
 
 TEST(Allocations, NoneInTheFirmwareRuntimeAcrossItsThreads) {

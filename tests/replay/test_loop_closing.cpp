@@ -82,7 +82,8 @@ TEST(PlaceStore, AFullStoreForgetsTheOldestAndItsHandlesGoStale) {
 // The camera glides 60 cm to the side of the synthetic room and back, one keyframe a second;
 // its odometry turns 1 degree too far and slides 1 cm at every step.
 TEST(LoopModule, ASyntheticLoopWithKnownDriftIsFoundAndMostOfTheDriftRemoved) {
-  const testing::SyntheticScene scene;
+  // Half resolution: 25 rendered keyframes, cheap enough under qemu.
+  const testing::SyntheticScene scene = testing::SyntheticScene::half_resolution();
   Params p = testing::synthetic_params(scene);
   p.loop.min_age_s = 4.0;
   const Vocabulary& voc = shipped_vocabulary();

@@ -22,7 +22,8 @@ class PlaceDatabase {
   // Replaces what the slot held; words beyond max_words_per_place are left out (the lightest).
   void add(int slot, const BowVector& v);
   void remove(int slot);
-  // The `max` best places with allowed(context, slot), best first; returns how many.
+  // The `max` best places with allowed(context, slot), best first; returns how many. Uses the
+  // database's own scratch: one query at a time.
   using Filter = bool (*)(const void* context, int slot);
   int query(const BowVector& v, Filter allowed, const void* context, PlaceMatch* out, int max);
   int places() const { return places_; }
