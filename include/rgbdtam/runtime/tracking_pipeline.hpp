@@ -26,11 +26,12 @@ struct TrackingCounters {
   uint32_t single_term = 0;           // frames whose pose came from one term, the other not fitting
   uint32_t retried = 0;               // frames whose first estimate failed a health check
   uint32_t recovered_by_guesses = 0;  // ... and passed from another initial guess
-  uint32_t recovered_by_last_frame = 0;  // ... or against the last valid frame
-  uint32_t relocalised = 0;              // lost frames found again in the map
-  uint32_t loop_corrections = 0;         // loop closures adopted
-  uint32_t withheld = 0;                 // tracked frames not reported valid after a correction
-  uint32_t loop_dropped_keyframes = 0;   // the loop queue was full: not remembered as places
+  uint32_t recovered_by_last_frame = 0;      // ... or against the last valid frame
+  uint32_t relocalised = 0;                  // lost frames found again in the map
+  uint32_t relocalised_on_new_keyframe = 0;  // ... whose place's dense keyframe was recycled
+  uint32_t loop_corrections = 0;             // loop closures adopted
+  uint32_t withheld = 0;                     // tracked frames not reported valid after a correction
+  uint32_t loop_dropped_keyframes = 0;       // the loop queue was full: not remembered as places
 };
 
 class TrackingPipeline {
