@@ -37,7 +37,7 @@ struct Projector {
     const float qy = r[3] * p.x + r[4] * p.y + r[5] * p.z + t[1];
     const float qz = r[6] * p.x + r[7] * p.y + r[8] * p.z + t[2];
     if (qz < kMinDepthM) return false;
-    pinhole.project(qx, qy, qz, u, v);
+    pinhole.project_inverse_depth(qx, qy, 1.f / qz, u, v);
     *z = qz;
     return true;
   }
