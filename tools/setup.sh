@@ -2,17 +2,20 @@
 # Installs the Debian packages rgbdtam needs. With --aarch64 it also installs the cross
 # toolchain and qemu-user, and unpacks the arm64 static libpng, zlib and libgpiod into .sysroot/arm64
 # (download only: the host's package set is not changed to multiarch).
-# With --fuzz it installs clang, whose libFuzzer tools/fuzz.sh uses.
+# With --fuzz it installs clang, whose libFuzzer tools/fuzz.sh uses; with --opencv, OpenCV's
+# contrib modules for rgbdtam-vs-opencv.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 aarch64=false
 fuzz=false
+opencv=false
 for arg in "$@"; do
   case "$arg" in
     --aarch64) aarch64=true ;;
     --fuzz) fuzz=true ;;
-    *) echo "usage: tools/setup.sh [--aarch64] [--fuzz]" >&2; exit 2 ;;
+    --opencv) opencv=true ;;
+    *) echo "usage: tools/setup.sh [--aarch64] [--fuzz] [--opencv]" >&2; exit 2 ;;
   esac
 done
 
@@ -29,6 +32,8 @@ packages=(build-essential cmake libeigen3-dev libpng-dev zlib1g-dev libgpiod-dev
 command -v node >/dev/null && command -v npm >/dev/null || packages+=(nodejs npm)
 if $aarch64; then packages+=(g++-aarch64-linux-gnu qemu-user); fi
 if $fuzz; then packages+=(clang); fi  # libFuzzer ships with Debian's clang
+# rgbdtam-vs-opencv (the dynamic build's host benchmark) compares with OpenCV's RgbdOdometry.
+if $opencv; then packages+=(libopencv-dev libopencv-contrib-dev); fi
 
 missing=()
 for p in "${packages[@]}"; do

@@ -6,7 +6,7 @@
 # The slow full-sequence test is left to the release build.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-tools/setup.sh --aarch64 --fuzz
+tools/setup.sh --aarch64 --fuzz --opencv
 jobs=$(nproc)
 
 run() {

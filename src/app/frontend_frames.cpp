@@ -8,7 +8,6 @@ Status FrontendFrames::open(const char* sequence, const Params& p) {
                                        p.sensor.depth_time_offset_ns));
   undistorter_.init(p.camera, p.distortion);
   frame_.allocate(p.camera, p.sensor.depth_factor, p.sensor.depth_range);
-  depth_.allocate(p.camera.width_px, p.camera.height_px);
   return Status::ok();
 }
 
@@ -19,8 +18,7 @@ bool FrontendFrames::load(int i) {
   Status warning;
   if (!source_.next(&f, &warning).is_ok() || f.depth == nullptr) return false;
   undistorter_.undistort_gray(f.gray, &frame_.gray(0));
-  undistorter_.undistort_depth(f.depth, &depth_);
-  frame_.build_inverse_depth(depth_);
+  frame_.build_inverse_depth(f.depth, undistorter_);
   return true;
 }
 

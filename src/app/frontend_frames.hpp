@@ -21,7 +21,6 @@ class FrontendFrames {
   TumReplaySource source_;
   Undistorter undistorter_;
   FramePyramid frame_;
-  ImageU16 depth_;
 };
 
 }  // namespace rgbdtam

@@ -72,6 +72,7 @@ class ReplayJob {
   std::vector<OnKeyframe> on_keyframes_;  // the same
   std::vector<StampedPose> final_estimates_;
   LatencyStats tracking_ms_, frame_ms_;
+  LatencyStats keyframe_ms_;  // keyframes built after their frame's pose
   PoseEstimate last_pose_;
   int processed_ = 0;
   int reported_problems_ = 0;

@@ -42,7 +42,9 @@ Status load_board_and_params(const RunOptions& options, Board* board, Params* pa
   for (int i = 0; i < options.param_override_count; ++i) {
     RGBDTAM_RETURN_IF_ERROR(set_param(options.param_overrides[i], "--set", params));
   }
-  return Status::ok();
+  // As the firmware will (FirmwareRuntime::init), so that the memory budget checks the board's
+  // own pool sizes.
+  return apply_board_capacity(*board, params);
 }
 
 namespace {

@@ -54,7 +54,7 @@ void Undistorter::init(const PinholeIntrinsics& k, const RadTanDistortion& d) {
         t.w[3] = w(ax, ay);
         t.w[0] = static_cast<uint16_t>(kTapOne - t.w[1] - t.w[2] - t.w[3]);  // sum exactly one
       } else {
-        taps_[i] = {-1, {0, 0, 0, 0}};
+        taps_[i] = {0, {0, 0, 0, 0}};  // weights 0: the pixel becomes 0 without a branch
       }
       const long nu = std::lround(su), nv = std::lround(sv);
       nearest_[i] = (nu >= 0 && nv >= 0 && nu < width_ && nv < height_)
@@ -76,26 +76,20 @@ void Undistorter::undistort_gray(const uint8_t* raw, ImageF* out) const {
   constexpr float kTapToUnit = kToUnit / kTapOne;
   for (int i = 0; i < n; ++i) {
     const BilinearTap& t = taps_[i];
-    if (t.index < 0) {
-      dst[i] = 0.f;
-      continue;
-    }
     const uint8_t* p = raw + t.index;
     const int32_t v = p[0] * t.w[0] + p[1] * t.w[1] + p[width_] * t.w[2] + p[width_ + 1] * t.w[3];
     dst[i] = static_cast<float>(v) * kTapToUnit;
   }
 }
 
-void Undistorter::undistort_depth(const uint16_t* raw, ImageU16* out) const {
-  uint16_t* dst = out->data();
+void Undistorter::undistort_depth(const uint16_t* raw, const float* table, ImageF* out) const {
+  float* dst = out->data();
   const int n = width_ * height_;
-  for (int i = 0; i < n; ++i) {
-    if (identity_) {
-      dst[i] = raw[i];
-    } else {
-      dst[i] = nearest_[i] < 0 ? 0 : raw[nearest_[i]];
-    }
+  if (identity_) {
+    for (int i = 0; i < n; ++i) dst[i] = table[raw[i]];
+    return;
   }
+  for (int i = 0; i < n; ++i) dst[i] = table[nearest_[i] < 0 ? 0 : raw[nearest_[i]]];
 }
 
 }  // namespace rgbdtam

@@ -73,14 +73,14 @@ void KeyframeBuilder::allocate(const PinholeIntrinsics& finest, const TrackerOpt
 }
 
 size_t KeyframeBuilder::keyframe_bytes(const PinholeIntrinsics& finest, const TrackerOptions& opt) {
-  size_t points = 0;
+  size_t bytes = sizeof(Keyframe);
   PinholeIntrinsics k = finest;
   for (int l = 0; l < kPyramidLevels; ++l) {
-    points += 2 * static_cast<size_t>(points_capacity(opt, k, l, true)) +
-              static_cast<size_t>(points_capacity(opt, k, l, false));
+    bytes += 2 * TrackPoints::bytes(points_capacity(opt, k, l, true)) +
+             TrackPoints::bytes(points_capacity(opt, k, l, false));
     k = k.half();
   }
-  return points * sizeof(TrackPoint) + sizeof(Keyframe);
+  return bytes;
 }
 
 void KeyframeBuilder::allocate_keyframe(Keyframe* kf) const {
@@ -114,7 +114,7 @@ void KeyframeBuilder::build(const FramePyramid& frame, uint32_t id, int64_t time
 }
 
 void KeyframeBuilder::build_photometric(const FramePyramid& frame, const ImageU8& edges,
-                                        FixedVector<TrackPoint>* sets) {
+                                        TrackPoints* sets) {
   prepare(frame, &edges);
   for (int l = 0; l < kPyramidLevels; ++l) select_photometric(frame, frame, l, &sets[l]);
 }
@@ -159,7 +159,7 @@ void KeyframeBuilder::prepare(const FramePyramid& frame, const ImageU8* edges) {
 }
 
 void KeyframeBuilder::select_photometric(const FramePyramid& frame, const FramePyramid& depth,
-                                         int level, FixedVector<TrackPoint>* out) {
+                                         int level, TrackPoints* out) {
   out->clear();
   if (opt_.residuals.photometric == PhotometricMode::kOff) return;
   const bool dense = opt_.residuals.photometric == PhotometricMode::kDense;
@@ -197,8 +197,7 @@ void KeyframeBuilder::select_photometric(const FramePyramid& frame, const FrameP
   }
 }
 
-void KeyframeBuilder::select_geometric(const FramePyramid& frame, int level,
-                                       FixedVector<TrackPoint>* out) {
+void KeyframeBuilder::select_geometric(const FramePyramid& frame, int level, TrackPoints* out) {
   out->clear();
   if (opt_.residuals.geometric == GeometricMode::kOff) return;
   const ImageF& idepth = frame.inverse_depth(level);

@@ -32,108 +32,200 @@ struct Projector {
     pinhole = k.pinhole();
   }
   // Returns false when the point is behind the camera.
-  bool project(const TrackPoint& p, float* u, float* v, float* z) const {
-    const float qx = r[0] * p.x + r[1] * p.y + r[2] * p.z + t[0];
-    const float qy = r[3] * p.x + r[4] * p.y + r[5] * p.z + t[1];
-    const float qz = r[6] * p.x + r[7] * p.y + r[8] * p.z + t[2];
+  bool project(float x, float y, float z, float* u, float* v) const {
+    const float qx = r[0] * x + r[1] * y + r[2] * z + t[0];
+    const float qy = r[3] * x + r[4] * y + r[5] * z + t[1];
+    const float qz = r[6] * x + r[7] * y + r[8] * z + t[2];
     if (qz < kMinDepthM) return false;
     pinhole.project_inverse_depth(qx, qy, 1.f / qz, u, v);
-    *z = qz;
     return true;
   }
 };
 
-// Normal equations J^T W J and J^T W r. Rows sqrt(w) J / sigma are gathered in blocks and each
-// block's products are formed at once (a small matrix product that vectorises, instead of an
-// outer product per point); blocks are summed in double, so ~10^4 terms lose no precision
-// that matters.
-class NormalEquations {
- public:
-  // x is the normalised residual r / sigma, and j_scale = 1 / sigma normalises J alike.
-  void add(const float J[6], float j_scale, float weight, float x) {
-    const float s = std::sqrt(weight);
-    const float sj = s * j_scale;
-    for (int k = 0; k < 6; ++k) rows_(k, count_) = J[k] * sj;
-    rows_(6, count_) = s * x;
-    if (++count_ == kBlock) flush();
+// u, v and 1/z of points x, y, z; u = kInvalid where a point is behind the camera or outside
+// [1, u_max] x [1, v_max].
+void project_points(const Projector& P, const float* __restrict X, const float* __restrict Y,
+                    const float* __restrict Z, int n, float u_max, float v_max, float* __restrict u,
+                    float* __restrict v, float* __restrict inverse_z) {
+  const float r0 = P.r[0], r1 = P.r[1], r2 = P.r[2], r3 = P.r[3], r4 = P.r[4], r5 = P.r[5];
+  const float r6 = P.r[6], r7 = P.r[7], r8 = P.r[8], t0 = P.t[0], t1 = P.t[1], t2 = P.t[2];
+  const float fx = P.pinhole.fx, fy = P.pinhole.fy, cx = P.pinhole.cx, cy = P.pinhole.cy;
+  for (int i = 0; i < n; ++i) {
+    const float qx = r0 * X[i] + r1 * Y[i] + r2 * Z[i] + t0;
+    const float qy = r3 * X[i] + r4 * Y[i] + r5 * Z[i] + t1;
+    const float qz = r6 * X[i] + r7 * Y[i] + r8 * Z[i] + t2;
+    const float iz = 1.f / qz;
+    const float ui = fx * qx * iz + cx;  // Pinhole::project_inverse_depth
+    const float vi = fy * qy * iz + cy;
+    const bool in_view =
+        (qz >= kMinDepthM) & (ui >= 1.f) & (vi >= 1.f) & (ui <= u_max) & (vi <= v_max);
+    u[i] = in_view ? ui : kInvalid;
+    v[i] = vi;
+    inverse_z[i] = iz;
   }
-  void write(Eigen::Matrix<double, 6, 6>* H, Vector6d* g, double scale) {
-    flush();
-    *H += scale * H_;
-    *g += scale * g_;
-  }
+}
 
- private:
-  static constexpr int kBlock = 256;
-  void flush() {
-    if (count_ == 0) return;
-    for (int r = 0; r < 6; ++r) {
-      const auto a = rows_.row(r).head(count_);
-      for (int c = r; c < 6; ++c) {
-        const double v = a.dot(rows_.row(c).head(count_));
-        H_(r, c) += v;
-        if (c != r) H_(c, r) += v;
-      }
-      g_(r) += a.dot(rows_.row(6).head(count_));
-    }
-    count_ = 0;
+// The geometric residuals from the four inverse depths around each projection: where they
+// agree (no depth edge), the bilinear inverse depth against the point's, in inverse depth or in
+// depth; inverse_sigma 0 marks a point without residual.
+void geometric_residuals(const float* __restrict c00, const float* __restrict c01,
+                         const float* __restrict c10, const float* __restrict c11,
+                         const float* __restrict u, const float* __restrict v,
+                         const float* __restrict inverse_z, int n, bool inverse, float sigma_rho,
+                         float* __restrict residual, float* __restrict inverse_sigma) {
+  for (int i = 0; i < n; ++i) {
+    const float a = c00[i], b = c01[i], c = c10[i], d = c11[i];
+    const float lo = std::min(std::min(a, b), std::min(c, d));
+    const float hi = std::max(std::max(a, b), std::max(c, d));
+    const bool ok = (lo > 0.f) & (lo >= kDepthAgreement * hi);
+    const float ax = u[i] - static_cast<float>(static_cast<int>(u[i]));
+    const float ay = v[i] - static_cast<float>(static_cast<int>(v[i]));
+    const float top = a + ax * (b - a);
+    const float bottom = c + ax * (d - c);
+    const float rho = top + ay * (bottom - top);  // sample_bilinear
+    const float depth = 1.f / rho;
+    const float r = inverse ? inverse_z[i] - rho : 1.f / inverse_z[i] - depth;
+    // sigma_z = z^2 sigma_d / (f b) for the depth residual
+    const float sigma = inverse ? sigma_rho : sigma_rho * depth * depth;
+    residual[i] = ok ? r : 0.f;
+    inverse_sigma[i] = ok ? 1.f / sigma : 0.f;
   }
-  // Column i: sqrt(w) J^T / sigma, then sqrt(w) x; row-major, so each product is one dot.
-  Eigen::Matrix<float, 7, kBlock, Eigen::RowMajor> rows_;
-  Eigen::Matrix<double, 6, 6> H_ = Eigen::Matrix<double, 6, 6>::Zero();
-  Vector6d g_ = Vector6d::Zero();
-  int count_ = 0;
-};
+}
+
+// Sums kLanes interleaved partial sums, so that the compiler may vectorise a float reduction
+// without reordering it; blocks of points are summed in float and the blocks in double.
+constexpr int kLanes = 4;
+constexpr int kSumBlock = 256;
+static_assert(TrackPoints::kBlock % kLanes == 0 && kSumBlock % TrackPoints::kBlock == 0,
+              "lanes tile the padded point arrays");
+
+double sum_padded(const float* v, int n_padded) {
+  double total = 0.0;
+  for (int start = 0; start < n_padded; start += kSumBlock) {
+    const int end = std::min(start + kSumBlock, n_padded);
+    float lane[kLanes] = {};
+    for (int i = start; i < end; i += kLanes) {
+      for (int l = 0; l < kLanes; ++l) lane[l] += v[i + l];
+    }
+    for (const float s : lane) total += s;
+  }
+  return total;
+}
+
+float dot_lanes(const float* a, const float* b, int n) {
+  float lane[kLanes] = {};
+  for (int i = 0; i < n; i += kLanes) {
+    for (int l = 0; l < kLanes; ++l) lane[l] += a[i + l] * b[i + l];
+  }
+  return (lane[0] + lane[1]) + (lane[2] + lane[3]);
+}
+
+// Normal equations sum_i w_i J_i J_i^T and sum_i b_i J_i over the points' keyframe-side
+// Jacobians (structure of arrays): per block of points, 27 dot products that vectorise (one pass
+// per row, up to 7 sums each, counted 2.3 times the instructions: GCC left it scalar).
+void add_normal_equations(const TrackPoints& pts, const float* w, const float* b, double scale,
+                          Eigen::Matrix<double, 6, 6>* H, Vector6d* g) {
+  static_assert(kLanes == 4, "dot_lanes folds four lanes");
+  const int n = pts.padded_size();
+  float wJ[6][kSumBlock];
+  for (int start = 0; start < n; start += kSumBlock) {
+    const int m = std::min(kSumBlock, n - start);
+    const float* J[6];
+    for (int r = 0; r < 6; ++r) {
+      J[r] = pts.J(r) + start;
+      for (int i = 0; i < m; ++i) wJ[r][i] = w[start + i] * J[r][i];
+    }
+    for (int r = 0; r < 6; ++r) {
+      for (int c = r; c < 6; ++c) {
+        const double v = scale * dot_lanes(wJ[r], J[c], m);
+        (*H)(r, c) += v;
+        if (c != r) (*H)(c, r) += v;
+      }
+      (*g)(r) += scale * dot_lanes(b + start, J[r], m);
+    }
+  }
+}
 
 // Geman-McClure: rho(x) = x^2 / (2 (1 + x^2/c^2)), weight = rho'(x)/x = 1 / (1 + x^2/c^2)^2.
 struct GemanMcClure {
-  double inv_c2;
-  explicit GemanMcClure(double c) : inv_c2(1.0 / (c * c)) {}
-  double cost(double x) const { return 0.5 * x * x / (1.0 + x * x * inv_c2); }
-  double weight(double x) const {
-    const double d = 1.0 + x * x * inv_c2;
-    return 1.0 / (d * d);
-  }
+  float inv_c2;
+  explicit GemanMcClure(double c) : inv_c2(static_cast<float>(1.0 / (c * c))) {}
   double saturated_cost() const { return 0.5 / inv_c2; }
 };
+
+// One term's rows: for residual r_i with standard deviation 1/inv_sigma_i (valid where
+// inv_sigma_i > 0), x = r inv_sigma, the row weight w inv_sigma^2 and w x inv_sigma, and the
+// point's cost; a point without residual costs the kernel's maximum. Returns the valid count.
+int weigh_rows(const float* __restrict residual, const float* __restrict inv_sigma, int n_padded,
+               const GemanMcClure& gm, float* __restrict row_weight, float* __restrict row_residual,
+               float* __restrict cost) {
+  const float saturated = static_cast<float>(gm.saturated_cost());
+  const float inv_c2 = gm.inv_c2;
+  int valid = 0;
+  for (int i = 0; i < n_padded; ++i) {
+    // Without residual, s = 0, so x and both rows are 0.
+    const float s = inv_sigma[i];
+    const float x = residual[i] * s;
+    const float d = 1.f + x * x * inv_c2;
+    const float ws = s / (d * d);
+    row_weight[i] = ws * s;
+    row_residual[i] = ws * x;
+    const bool ok = s > 0.f;
+    cost[i] = ok ? 0.5f * x * x / d : saturated;
+    valid += ok ? 1 : 0;
+  }
+  return valid;
+}
 }  // namespace
 
 void Tracker::allocate(const Keyframe& model, const TrackerOptions& opt) {
   opt_ = opt;
-  int ph = 0, geo = 0;
+  int n = 1;
   for (int l = 0; l < kPyramidLevels; ++l) {
-    ph = std::max(ph, model.photometric(l).capacity());
-    geo = std::max(geo, model.geometric[l].capacity());
+    n = std::max(n, model.photometric(l).capacity());
+    n = std::max(n, model.geometric[l].capacity());
   }
-  ph_sample_.reserve_once(std::max(ph, 1));
-  ph_residual_.reserve_once(std::max(ph, 1));
-  geo_residual_.reserve_once(std::max(geo, 1));
-  geo_sigma_.reserve_once(std::max(geo, 1));
-  scratch_.reserve_once(std::max(std::max(ph, geo), 1));
-}
-
-void Tracker::sample_photometric(const FixedVector<TrackPoint>& pts, const ImageF& img,
-                                 const PinholeIntrinsics& k, const SE3& T_c_k) {
-  const Projector proj(T_c_k, k);
-  ph_sample_.clear();
-  for (const TrackPoint& p : pts) {
-    float u, v, z;
-    float s = kInvalid;
-    if (proj.project(p, &u, &v, &z) && img.contains(u, v, 1.f)) s = sample_bilinear(img, u, v);
-    (void)ph_sample_.push_back(s);
+  n = TrackPoints::round_up(n, TrackPoints::kBlock);
+  for (auto* buffer :
+       {&proj_u_, &proj_v_, &proj_inverse_z_, &ph_sample_, &ph_residual_, &geo_residual_,
+        &geo_inverse_sigma_, &corners_[0], &corners_[1], &corners_[2], &corners_[3], &row_weight_,
+        &row_residual_, &point_cost_, &scratch_}) {
+    buffer->reset(new float[static_cast<size_t>(n)]());
   }
 }
 
-void Tracker::estimate_gain_brightness(const FixedVector<TrackPoint>& pts) {
+void Tracker::project(const TrackPoints& pts, const PinholeIntrinsics& k, int width_px,
+                      int height_px, const SE3& T_c_k) {
+  const Projector P(T_c_k, k);
+  // In view with the 1-px margin that bilinear sampling needs (Image::contains).
+  const float u_max = static_cast<float>(width_px - 1) - 1.f;
+  const float v_max = static_cast<float>(height_px - 1) - 1.f;
+  project_points(P, pts.x(), pts.y(), pts.z(), pts.padded_size(), u_max, v_max, proj_u_.get(),
+                 proj_v_.get(), proj_inverse_z_.get());
+  const int n = pts.padded_size();
+  for (int i = pts.size(); i < n; ++i) proj_u_[i] = kInvalid;  // the padding is never in view
+}
+
+void Tracker::sample_photometric(const TrackPoints& pts, const ImageF& img) {
+  const float* u = proj_u_.get();
+  const float* v = proj_v_.get();
+  float* sample = ph_sample_.get();
+  const int n = pts.padded_size();
+  for (int i = 0; i < n; ++i)
+    sample[i] = u[i] == kInvalid ? kInvalid : sample_bilinear(img, u[i], v[i]);
+}
+
+void Tracker::estimate_gain_brightness(const TrackPoints& pts) {
   if (!opt_.gain_brightness) return;
   // Moment matching, a = std(I_kf) / std(I_cur), b = mean(I_kf) - a mean(I_cur): a least-squares
   // fit of I_kf on I_cur would be biased towards a = 0 (regression dilution), because edge
   // pixels make I_cur noisy under any misalignment.
   double n = 0, s_c = 0, s_k = 0, s_cc = 0, s_kk = 0;
+  const float* ref = pts.ref();
   for (int i = 0; i < pts.size(); ++i) {
     const float c = ph_sample_[i];
     if (c == kInvalid) continue;
-    const float kf = pts[i].ref;
+    const float kf = ref[i];
     if (std::fabs(gain_ * c + brightness_ - kf) > kGainInlier) continue;
     n += 1;
     s_c += c;
@@ -153,7 +245,7 @@ void Tracker::estimate_gain_brightness(const FixedVector<TrackPoint>& pts) {
 
 float Tracker::mad_sigma(int m) {
   // sigma = 1.4826 * median(|r - median(r)|) over scratch_[0, m), the paper's MAD estimate.
-  float* first = &scratch_[0];
+  float* first = scratch_.get();
   std::nth_element(first, first + m / 2, first + m);
   const float median = first[m / 2];
   for (int i = 0; i < m; ++i) first[i] = std::fabs(first[i] - median);
@@ -174,114 +266,115 @@ void Tracker::update_scales(int level, int n_ph, int n_geo) {
   // below the sensor model, so that misaligned structure still pulls.
   m = 0;
   for (int i = 0; i < n_geo; ++i)
-    if (geo_sigma_[i] != 0.f) scratch_[m++] = geo_residual_[i] / geo_sigma_[i];
+    if (geo_inverse_sigma_[i] != 0.f) scratch_[m++] = geo_residual_[i] * geo_inverse_sigma_[i];
   const float floor =
       level == 0 ? static_cast<float>(opt_.inverse_depth_sigma_floor / opt_.inverse_depth_sigma)
                  : 1.f;
   geo_scale_ = m >= kMinScaleSamples ? std::max(floor, mad_sigma(m)) : 1.f;
 }
 
-void Tracker::sample_geometric(const FixedVector<TrackPoint>& pts, const ImageF& idepth,
-                               const PinholeIntrinsics& k, const SE3& T_c_k) {
-  const Projector proj(T_c_k, k);
-  const bool inverse = opt_.residuals.geometric == GeometricMode::kInverseDepth;
-  const float sigma_rho = static_cast<float>(opt_.inverse_depth_sigma);
-  geo_residual_.clear();
-  geo_sigma_.clear();
-  for (const TrackPoint& p : pts) {
-    float u, v, z;
-    float residual = 0.f, sigma = 0.f;  // sigma 0 marks invalid
-    if (proj.project(p, &u, &v, &z) && idepth.contains(u, v, 1.f)) {
-      const int x0 = static_cast<int>(u), y0 = static_cast<int>(v);
-      const float* r0 = idepth.row(y0) + x0;
-      const float* r1 = r0 + idepth.width();
-      const float lo = std::min(std::min(r0[0], r0[1]), std::min(r1[0], r1[1]));
-      const float hi = std::max(std::max(r0[0], r0[1]), std::max(r1[0], r1[1]));
-      if (lo > 0.f && lo >= kDepthAgreement * hi) {
-        const float rho = sample_bilinear(idepth, u, v);
-        if (inverse) {
-          residual = 1.f / z - rho;
-          sigma = sigma_rho;
-        } else {
-          const float depth = 1.f / rho;
-          residual = z - depth;
-          sigma = sigma_rho * depth * depth;  // sigma_z = z^2 sigma_d / (f b)
-        }
-      }
+void Tracker::sample_geometric(const TrackPoints& pts, const ImageF& idepth) {
+  const float* u = proj_u_.get();
+  const float* v = proj_v_.get();
+  const int n = pts.padded_size();
+  // The four neighbours of every projection, gathered in a scalar loop (SSE2 and NEON have no
+  // gather), then tested and interpolated in one that vectorises. Out of view: all 0.
+  float* __restrict c00 = corners_[0].get();
+  float* __restrict c01 = corners_[1].get();
+  float* __restrict c10 = corners_[2].get();
+  float* __restrict c11 = corners_[3].get();
+  for (int i = 0; i < n; ++i) {
+    if (u[i] == kInvalid) {
+      c00[i] = c01[i] = c10[i] = c11[i] = 0.f;
+      continue;
     }
-    (void)geo_residual_.push_back(residual);
-    (void)geo_sigma_.push_back(sigma);
+    const float* r0 = idepth.row(static_cast<int>(v[i])) + static_cast<int>(u[i]);
+    const float* r1 = r0 + idepth.width();
+    c00[i] = r0[0];
+    c01[i] = r0[1];
+    c10[i] = r1[0];
+    c11[i] = r1[1];
   }
+  geometric_residuals(c00, c01, c10, c11, u, v, proj_inverse_z_.get(), n,
+                      opt_.residuals.geometric == GeometricMode::kInverseDepth,
+                      static_cast<float>(opt_.inverse_depth_sigma), geo_residual_.get(),
+                      geo_inverse_sigma_.get());
 }
 
-Tracker::LevelCost Tracker::accumulate(const FixedVector<TrackPoint>& ph,
-                                       const FixedVector<TrackPoint>& geo) {
+int Tracker::weigh(const TrackPoints& pts, bool geometric) {
+  // The photometric residuals share one scale; the geometric ones are each divided by their
+  // sensor model, and all of them by the term's spread.
+  float* inv_sigma = scratch_.get();
+  const int n = pts.padded_size();
+  if (geometric) {
+    const float inv_scale = 1.f / geo_scale_;
+    for (int i = 0; i < n; ++i) inv_sigma[i] = geo_inverse_sigma_[i] * inv_scale;
+  } else {
+    const float inv_ph_sigma = 1.f / ph_sigma_;
+    for (int i = 0; i < n; ++i) inv_sigma[i] = ph_sample_[i] == kInvalid ? 0.f : inv_ph_sigma;
+  }
+  const float* residual = geometric ? geo_residual_.get() : ph_residual_.get();
+  return weigh_rows(residual, inv_sigma, n, GemanMcClure(opt_.robust_c), row_weight_.get(),
+                    row_residual_.get(), point_cost_.get());
+}
+
+Tracker::LevelCost Tracker::measure(const TrackPoints& ph, const TrackPoints& geo) {
   LevelCost out;
-  const GemanMcClure gm(opt_.robust_c);
-  NormalEquations ne_ph, ne_geo;
-  double cost_ph = 0.0, cost_geo = 0.0;
-  int valid_geo = 0;
-  const double inv_sigma = 1.0 / ph_sigma_;
-  for (int i = 0; i < ph.size(); ++i) {
-    if (ph_sample_[i] == kInvalid) {
-      cost_ph += gm.saturated_cost();
-      continue;
-    }
-    const double x = ph_residual_[i] * inv_sigma;
-    cost_ph += gm.cost(x);
-    ne_ph.add(ph[i].J, static_cast<float>(inv_sigma), static_cast<float>(gm.weight(x)),
-              static_cast<float>(x));
-    ++out.valid;
-  }
-  for (int i = 0; i < geo.size(); ++i) {
-    if (geo_sigma_[i] == 0.f) {
-      cost_geo += gm.saturated_cost();
-      continue;
-    }
-    const double inv_s = 1.0 / (geo_sigma_[i] * geo_scale_);
-    const double x = geo_residual_[i] * inv_s;
-    cost_geo += gm.cost(x);
-    ne_geo.add(geo[i].J, static_cast<float>(inv_s), static_cast<float>(gm.weight(x)),
-               static_cast<float>(x));
-    ++out.valid;
-    ++valid_geo;
-  }
-  ne_ph.write(&out.H, &out.g, 1.0);
-  ne_geo.write(&out.H, &out.g, opt_.geometric_weight);
-  out.cost = cost_ph + opt_.geometric_weight * cost_geo;
-  const int invalid_ph = ph.size() - (out.valid - valid_geo);
+  const double saturated = GemanMcClure(opt_.robust_c).saturated_cost();
+  const int valid_ph = weigh(ph, false);
+  const double cost_ph = sum_padded(point_cost_.get(), ph.padded_size());
+  const int valid_geo = weigh(geo, true);
+  const double cost_geo = sum_padded(point_cost_.get(), geo.padded_size());
+  // The padding counts as points without residual; their saturated cost is taken back out.
+  const int invalid_ph = ph.size() - valid_ph;
   const int invalid_geo = geo.size() - valid_geo;
-  out.valid_cost =
-      out.cost - gm.saturated_cost() * (invalid_ph + opt_.geometric_weight * invalid_geo);
+  const double padding =
+      (ph.padded_size() - ph.size()) + opt_.geometric_weight * (geo.padded_size() - geo.size());
+  out.valid = valid_ph + valid_geo;
+  out.cost = cost_ph + opt_.geometric_weight * cost_geo - saturated * padding;
+  out.valid_cost = out.cost - saturated * (invalid_ph + opt_.geometric_weight * invalid_geo);
   out.total = ph.size() + geo.size();
   return out;
 }
 
-const FixedVector<TrackPoint>& Tracker::photometric_points(const Keyframe& kf, int level) const {
+void Tracker::add_normal_equations_of(const TrackPoints& ph, const TrackPoints& geo, LevelCost* c) {
+  c->H.setZero();
+  c->g.setZero();
+  (void)weigh(ph, false);
+  add_normal_equations(ph, row_weight_.get(), row_residual_.get(), 1.0, &c->H, &c->g);
+  (void)weigh(geo, true);
+  add_normal_equations(geo, row_weight_.get(), row_residual_.get(), opt_.geometric_weight, &c->H,
+                       &c->g);
+  c->has_normal_equations = true;
+}
+
+const TrackPoints& Tracker::photometric_points(const Keyframe& kf, int level) const {
   return (terms_ & kPhotometricTerm) != 0 ? kf.photometric(level) : no_points_;
 }
 
-const FixedVector<TrackPoint>& Tracker::geometric_points(const Keyframe& kf,
-                                                         const FramePyramid& frame,
-                                                         int level) const {
+const TrackPoints& Tracker::geometric_points(const Keyframe& kf, const FramePyramid& frame,
+                                             int level) const {
   return (terms_ & kGeometricTerm) != 0 && frame.has_depth() ? kf.geometric[level] : no_points_;
 }
 
 Tracker::LevelCost Tracker::evaluate_level(const Keyframe& kf, const FramePyramid& frame, int level,
                                            const SE3& T_c_k, bool new_scale) {
-  const FixedVector<TrackPoint>& ph = photometric_points(kf, level);
-  const FixedVector<TrackPoint>& geo = geometric_points(kf, frame, level);
+  const TrackPoints& ph = photometric_points(kf, level);
+  const TrackPoints& geo = geometric_points(kf, frame, level);
   const PinholeIntrinsics& k = frame.intrinsics(level);
-  sample_photometric(ph, frame.gray(level), k, T_c_k);
+  const ImageF& img = frame.gray(level);
+  project(ph, k, img.width(), img.height(), T_c_k);
+  sample_photometric(ph, img);
   estimate_gain_brightness(ph);
-  ph_residual_.clear();
-  for (int i = 0; i < ph.size(); ++i) {
-    (void)ph_residual_.push_back(
-        ph_sample_[i] == kInvalid ? 0.f : gain_ * ph_sample_[i] + brightness_ - ph[i].ref);
+  const float* ref = ph.ref();
+  for (int i = 0; i < ph.padded_size(); ++i) {
+    const float s = ph_sample_[i];
+    ph_residual_[i] = s == kInvalid ? 0.f : gain_ * s + brightness_ - ref[i];
   }
-  sample_geometric(geo, frame.inverse_depth(level), k, T_c_k);
+  project(geo, k, img.width(), img.height(), T_c_k);
+  sample_geometric(geo, frame.inverse_depth(level));
   if (new_scale) update_scales(level, ph.size(), geo.size());
-  return accumulate(ph, geo);
+  return measure(ph, geo);
 }
 
 Tracker::LevelCost Tracker::optimize_level(const Keyframe& kf, const FramePyramid& frame, int level,
@@ -293,8 +386,12 @@ Tracker::LevelCost Tracker::optimize_level(const Keyframe& kf, const FramePyrami
   // from the keyframe.
   double damping = 0.0;
   bool buffers_current = true;  // the scratch buffers hold the evaluation at *T_c_k
+  const TrackPoints& ph = photometric_points(kf, level);
+  const TrackPoints& geo = geometric_points(kf, frame, level);
   for (int it = 0; it < max_iterations; ++it) {
     if (current.valid < 6) break;
+    // Formed only for a pose a step is taken from: a rejected or final evaluation needs none.
+    if (!current.has_normal_equations) add_normal_equations_of(ph, geo, &current);
     Eigen::Matrix<double, 6, 6> H = current.H;
     H.diagonal() *= 1.0 + 1e-6 + damping;
     const Vector6d delta = H.ldlt().solve(-current.g);
@@ -334,6 +431,9 @@ TrackResult Tracker::track(const Keyframe& kf, const FramePyramid& frame, const 
     finest = optimize_level(kf, frame, level, &T_c_k, true, opt_.max_iterations[level],
                             &result.iterations);
     result.level_sigma[level] = ph_sigma_;
+  }
+  if (!finest.has_normal_equations) {
+    add_normal_equations_of(photometric_points(kf, 0), geometric_points(kf, frame, 0), &finest);
   }
   result.T_k_c = T_c_k.inverse();
   result.terms =
@@ -405,8 +505,8 @@ struct Spread {
 void Tracker::describe_fit(const Keyframe& kf, const FramePyramid& frame, const SE3& T_c_k,
                            float reference_sigma, TrackResult* out) {
   // The scratch buffers hold the finest level's evaluation at T_c_k.
-  const FixedVector<TrackPoint>& ph = photometric_points(kf, 0);
-  const FixedVector<TrackPoint>& geo = geometric_points(kf, frame, 0);
+  const TrackPoints& ph = photometric_points(kf, 0);
+  const TrackPoints& geo = geometric_points(kf, frame, 0);
   const double sigma_ref = reference_sigma > 0.f ? reference_sigma : ph_sigma_;
   const bool inverse = opt_.residuals.geometric == GeometricMode::kInverseDepth;
   Spread intensities, depths;
@@ -415,7 +515,7 @@ void Tracker::describe_fit(const Keyframe& kf, const FramePyramid& frame, const 
     if (ph_sample_[i] == kInvalid) continue;
     const float r = ph_residual_[i];
     if (std::fabs(r) < kInlierSigmas * sigma_ref) ++inliers;
-    intensities.add(ph[i].ref);
+    intensities.add(ph.ref()[i]);
     scratch_[m++] = r;
   }
   if (m >= kMinScaleSamples && intensities.std() > 0.0) {
@@ -425,10 +525,10 @@ void Tracker::describe_fit(const Keyframe& kf, const FramePyramid& frame, const 
   m = 0;
   inliers = 0;
   for (int i = 0; i < geo.size(); ++i) {
-    if (geo_sigma_[i] == 0.f) continue;
+    if (geo_inverse_sigma_[i] == 0.f) continue;
     const float r = geo_residual_[i];
-    if (std::fabs(r) < kInlierSigmas * geo_sigma_[i]) ++inliers;
-    depths.add(inverse ? geo[i].ref : 1.0 / geo[i].ref);
+    if (std::fabs(r) * geo_inverse_sigma_[i] < kInlierSigmas) ++inliers;
+    depths.add(inverse ? geo.ref()[i] : 1.0 / geo.ref()[i]);
     scratch_[m++] = r;
   }
   if (m >= kMinScaleSamples && depths.std() > 0.0) {
@@ -455,8 +555,7 @@ void Tracker::describe_fit(const Keyframe& kf, const FramePyramid& frame, const 
 
 void Tracker::motion_stats(const Keyframe& kf, const FramePyramid& frame, const SE3& T_c_k,
                            double* visible_fraction, double* parallax) {
-  const FixedVector<TrackPoint>& pts =
-      kf.photometric(0).size() > 0 ? kf.photometric(0) : kf.geometric[0];
+  const TrackPoints& pts = kf.photometric(0).size() > 0 ? kf.photometric(0) : kf.geometric[0];
   const PinholeIntrinsics& k = frame.intrinsics(0);
   const Projector full(T_c_k, k);
   const ImageF& image = frame.gray(0);
@@ -464,22 +563,22 @@ void Tracker::motion_stats(const Keyframe& kf, const FramePyramid& frame, const 
   constexpr int kStride = 4;  // fractions and medians: a quarter of the points is plenty
   int visible = 0, n = 0;
   for (int i = 0; i < pts.size(); i += kStride) {
-    const TrackPoint& p = pts[i];
+    const float x = pts.x()[i], y = pts.y()[i], z = pts.z()[i];
     // The angle the point's line of sight turns through from the translation alone, |t| / z
     // to first order: the median over the points, so that near points in a corner of the view
     // do not cut short a keyframe whose far points still need baseline to be mapped.
-    scratch_[n++] = static_cast<float>(t.norm() / p.z);
-    float u, v, z;
+    scratch_[n++] = static_cast<float>(t.norm() / z);
+    float u, v;
     // In view; an occlusion test against the frame's depth flickers at depth edges (fr1_xyz,
     // all frames: 0.84 cm without it, 0.82-0.91 with it, keyframes made and reused more often).
-    if (full.project(p, &u, &v, &z) && image.contains(u, v, 1.f)) ++visible;
+    if (full.project(x, y, z, &u, &v) && image.contains(u, v, 1.f)) ++visible;
   }
   if (n == 0) {
     *visible_fraction = *parallax = 0.0;
     return;
   }
   *visible_fraction = static_cast<double>(visible) / n;
-  std::nth_element(&scratch_[0], &scratch_[0] + n / 2, &scratch_[0] + n);
+  std::nth_element(scratch_.get(), scratch_.get() + n / 2, scratch_.get() + n);
   *parallax = scratch_[n / 2];
 }
 

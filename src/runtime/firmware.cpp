@@ -42,7 +42,7 @@ PoseEstimate FirmwareRuntime::on_frame(const SensorFrame& frame, int64_t arrival
   const int64_t t0 = clock_();
   const bool trigger = gpio_ != nullptr && board_.gpio_trigger_line >= 0;
   if (trigger) gpio_->set(board_.gpio_trigger_line, true);  // the next exposure starts now
-  const PoseEstimate pose = slam_.process(frame);
+  const PoseEstimate pose = slam_.track(frame);
   ++counters_.frames;
   const bool valid = (pose.flags & kPoseValid) != 0;
   if (valid) ++counters_.tracked;
@@ -78,6 +78,7 @@ PoseEstimate FirmwareRuntime::on_frame(const SensorFrame& frame, int64_t arrival
                           : state == LedState::kInitialising ? mavlink::kMavStateStandby
                                                              : mavlink::kMavStateCritical);
   led_.update(state, now);
+  slam_.map_pending();  // the keyframe and the mapper's step after the pose is sent
   if (trigger) gpio_->set(board_.gpio_trigger_line, false);
   const int64_t done = clock_();
   tracker_time_.add(done - t0);

@@ -12,6 +12,7 @@ void LatencyStats::add(int64_t ns) {
   const int64_t bin = std::min<int64_t>(ns / kBinNs, kBins - 1);
   ++bins_[bin];
   ++count_;
+  sum_ns_ += ns;
   max_ns_ = std::max(max_ns_, ns);
 }
 

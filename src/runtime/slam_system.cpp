@@ -83,6 +83,7 @@ bool SlamSystem::keyframe_pose(uint32_t keyframe_id, SE3* T_w_k) {
 }
 
 void SlamSystem::map_pending() {
+  build_pending_keyframe();
   if (loop_on_) {
     if (params_.loop.threaded) {
       loop_thread_.notify();

@@ -83,7 +83,7 @@ bool TrackingPipeline::reuse_keyframe(const Attempt& current, int64_t t_ns, Pose
   return true;
 }
 
-void TrackingPipeline::start_keyframe(const SensorFrame& frame, const SE3& T_w_c, PoseEstimate* out,
+void TrackingPipeline::start_keyframe(int64_t timestamp_ns, const SE3& T_w_c, PoseEstimate* out,
                                       bool after_reset) {
   const uint32_t reference_id = reference_ != nullptr ? reference_->id : next_keyframe_id_;
   Keyframe* kf = pool_->acquire(reference_);
@@ -91,7 +91,7 @@ void TrackingPipeline::start_keyframe(const SensorFrame& frame, const SE3& T_w_c
   // blind (the authors' "local map"), until its own multi-view map replaces it.
   const bool propagate = mapper_queue_ != nullptr;
   if (propagate) propagate_map(T_w_c);
-  builder_.build(this->frame(), next_keyframe_id_++, frame.timestamp_ns, T_w_c, kf,
+  builder_.build(this->frame(), next_keyframe_id_++, timestamp_ns, T_w_c, kf,
                  propagate ? &propagated_ : nullptr);
   reference_ = kf;
   ++counters_.keyframes;

@@ -88,7 +88,7 @@ bool TrackingPipeline::relocalise(const SensorFrame& frame, PoseEstimate* out) {
     // Its dense keyframe is gone: this frame becomes one, at the verified pose. Nothing dense
     // can confirm that pose, so the 3-D match must be twice as strong.
     if (best.inliers < 2 * relocalisation_limits_.min_inliers) return false;
-    start_keyframe(frame, T_w_c, out, true);
+    start_keyframe(frame.timestamp_ns, T_w_c, out, true);
     ++counters_.relocalised_on_new_keyframe;
     out->T_w_c = T_w_c;
     out->flags |= kPoseValid;

@@ -27,7 +27,6 @@ Status TrackingPipeline::init(const Params& params, KeyframePool* keyframes) {
     f.allocate(params_.camera, params_.sensor.depth_factor, params_.sensor.depth_range);
   }
   propagated_.allocate(params_.camera, params_.sensor.depth_factor, params_.sensor.depth_range);
-  depth_undistorted_.allocate(params_.camera.width_px, params_.camera.height_px);
   builder_.allocate(params_.camera, params_.tracker);
   const int map_points = params_.map_enabled ? params_.map_seeds : 0;
   pool_->allocate(params_.keyframe_pool_size, builder_, map_points);
@@ -143,7 +142,12 @@ void TrackingPipeline::accept(const Attempt& a, const SensorFrame& frame, PoseEs
   const bool moved = r.parallax > params_.tracker.keyframe_parallax && !pool_->pinned(a.kf);
   const bool new_view = r.overlap < params_.tracker.keyframe_overlap || moved;
   if (new_view && !reuse_keyframe(a, frame.timestamp_ns, out) && this->frame().has_depth()) {
-    start_keyframe(frame, out->T_w_c, out);
+    // Built after the pose is out (build_pending_keyframe), from this frame's buffer, which the
+    // next frame leaves alone.
+    out->flags |= kNewKeyframe;
+    out->keyframe_id = next_keyframe_id_;
+    pending_keyframe_.due = true;
+    pending_keyframe_.frame_buffer = current_;
   }
 }
 
@@ -154,7 +158,7 @@ void TrackingPipeline::on_lost(const SensorFrame& frame, uint32_t failed, PoseEs
   if (frame.timestamp_ns - last_ns_ >= params_.reset_after_lost_ns && this->frame().has_depth()) {
     // Restart from the last valid pose: the estimate jumps, so say so.
     fallback_ = nullptr;
-    start_keyframe(frame, T_w_last_, out, true);
+    start_keyframe(frame.timestamp_ns, T_w_last_, out, true);
     last_ns_ = frame.timestamp_ns;
     velocity_.setZero();
     last_valid_frame_kept_ = false;
@@ -165,6 +169,7 @@ void TrackingPipeline::on_lost(const SensorFrame& frame, uint32_t failed, PoseEs
 }
 
 PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
+  build_pending_keyframe();  // in case the caller has not
   PoseEstimate out;
   out.sequence = frame.sequence;
   out.timestamp_ns = frame.timestamp_ns;
@@ -183,8 +188,7 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
   constexpr double kMinSurfaceFraction = 0.5;
   bool depth_usable = false;
   if (frame.depth != nullptr) {
-    undistorter_.undistort_depth(frame.depth, &depth_undistorted_);
-    pyramid.build_inverse_depth(depth_undistorted_);
+    pyramid.build_inverse_depth(frame.depth, undistorter_);
     const SurfaceCount c = count_surface_pixels(pyramid.inverse_depth(0), kSurfaceStridePx);
     depth_usable = c.on_surface >= kMinSurfaceFraction * c.valid;
     if (!depth_usable) ++counters_.depth_not_surface;
@@ -200,7 +204,7 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
       out.flags |= kNotInitialised;
       return out;
     }
-    start_keyframe(frame, SE3(), &out);
+    start_keyframe(frame.timestamp_ns, SE3(), &out);
     T_w_last_ = SE3();
     last_ns_ = frame.timestamp_ns;
     has_last_ = true;
@@ -249,7 +253,11 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
   pending_flags_ = 0;
   out.reset_counter = reset_counter_;
   const bool valid = (out.flags & kPoseValid) != 0;
-  if (valid) offer_to_mapper(out, (out.flags & kNewKeyframe) != 0);
+  if (pending_keyframe_.due) {
+    pending_keyframe_.pose = out;  // offered to the mapper with its keyframe
+  } else if (valid) {
+    offer_to_mapper(out, (out.flags & kNewKeyframe) != 0);
+  }
   if (valid && t <= withhold_until_ns_) {
     out.flags = (out.flags & ~kPoseValid) | kSettling;
     ++counters_.withheld;
@@ -258,6 +266,17 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
   last_valid_frame_kept_ = last_valid_frame_kept_ || valid;
   previous_valid_ = valid;
   return out;
+}
+
+void TrackingPipeline::build_pending_keyframe() {
+  if (!pending_keyframe_.due) return;
+  pending_keyframe_.due = false;
+  const int current = current_;
+  current_ = pending_keyframe_.frame_buffer;  // frame() is the keyframe's frame meanwhile
+  PoseEstimate& pose = pending_keyframe_.pose;
+  start_keyframe(pose.timestamp_ns, pose.T_w_c, &pose);
+  offer_to_mapper(pose, true);
+  current_ = current;
 }
 
 }  // namespace rgbdtam

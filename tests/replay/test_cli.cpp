@@ -52,6 +52,17 @@ bool exists(const std::string& path) {
   return ::stat(path.c_str(), &st) == 0;
 }
 
+TEST(Cli, TheMemoryBudgetChecksTheBoardsOwnPoolSize) {
+  // raspberry-pi-4 keeps 24 keyframes (capacity.keyframe_pool), not the config's 32: over a
+  // small budget, the refusal names the pool the firmware would allocate.
+  const std::string board = testing::source_path("board/raspberry-pi-4");
+  const Outcome o = rgbdtam("run --board " + board + " --board-set sensor.kind=replay" +
+                            " --board-set sensor.usb_id= --board-set sensor.device=" + clip() +
+                            " --board-set memory.budget_mb=64 --max-frames 1 --quiet");
+  EXPECT_NE(o.exit_code, 0);
+  EXPECT_NE(o.err.find("map.keyframe_pool 24 x"), std::string::npos) << o.err;
+}
+
 TEST(Cli, ABadFrameCountIsAUsageError) {
   const Outcome o = rgbdtam("replay " + clip() + " --config " + config() + " --max-frames abc");
   EXPECT_EQ(o.exit_code, 2);

@@ -27,7 +27,10 @@ struct PathError {
 constexpr int kFrames = 24;
 constexpr double kFps = 10.0;
 
-PathError track_synthetic(const char* residuals, int frames, double fps) {
+// build_after_pose: builds each keyframe right after its frame's pose, as the firmware does,
+// and checks that process() itself left it for later; otherwise the next process() builds it.
+PathError track_synthetic(const char* residuals, int frames, double fps,
+                          bool build_after_pose = false) {
   testing::SyntheticScene scene;
   KeyframePool keyframes;
   TrackingPipeline pipeline;
@@ -39,7 +42,15 @@ PathError track_synthetic(const char* residuals, int frames, double fps) {
     const double t = i / fps;
     const SE3 T_w_c = testing::SyntheticScene::pose_at(t);
     const testing::SyntheticFrame& f = rendered[static_cast<size_t>(i)];
+    const uint32_t keyframes_before = pipeline.counters().keyframes;
     const PoseEstimate pose = pipeline.process(f.as_sensor_frame(scene.camera, i, fps));
+    if (build_after_pose && i > 0 && (pose.flags & kNewKeyframe) != 0) {
+      EXPECT_EQ(pipeline.counters().keyframes, keyframes_before) << "built before the pose";
+      pipeline.build_pending_keyframe();
+      EXPECT_EQ(pipeline.counters().keyframes, keyframes_before + 1);
+      pipeline.build_pending_keyframe();
+      EXPECT_EQ(pipeline.counters().keyframes, keyframes_before + 1) << "built twice";
+    }
     if ((pose.flags & kPoseValid) == 0) continue;
     ++err.tracked;
     const SE3 truth = T_w0.inverse() * T_w_c;  // world = first camera
@@ -59,6 +70,16 @@ TEST(SyntheticTracking, PaperConfigurationIsSubMillimetre) {
   EXPECT_LT(e.max_rotation_rad, 1e-3);
   std::printf("PS+GIDD: max error %.3f mm, %.4f deg, %u keyframes\n", e.max_translation_m * 1e3,
               e.max_rotation_rad * 180 / M_PI, e.keyframes);
+}
+
+TEST(SyntheticTracking, AKeyframeBuiltAfterItsPoseOrAtTheNextFrameGivesTheSamePath) {
+  const PathError after_pose = track_synthetic("PS+GIDD", kFrames, kFps, true);
+  const PathError next_frame = track_synthetic("PS+GIDD", kFrames, kFps, false);
+  EXPECT_GT(after_pose.keyframes, 1u);
+  EXPECT_EQ(after_pose.keyframes, next_frame.keyframes);
+  EXPECT_EQ(after_pose.tracked, next_frame.tracked);
+  EXPECT_EQ(after_pose.max_translation_m, next_frame.max_translation_m);
+  EXPECT_EQ(after_pose.max_rotation_rad, next_frame.max_rotation_rad);
 }
 
 TEST(SyntheticTracking, PhotometricOnlyAndGeometricOnlyAreSubMillimetreToo) {

@@ -61,19 +61,21 @@ TEST(Undistorter, IdentityWithoutDistortionAndNearestForDepth) {
   EXPECT_TRUE(und.is_identity());
   std::vector<uint16_t> depth(640 * 480);
   for (size_t i = 0; i < depth.size(); ++i) depth[i] = static_cast<uint16_t>(i % 5000);
-  ImageU16 out;
+  std::vector<float> as_is(1 << 16);  // a table that keeps the raw value
+  for (size_t v = 0; v < as_is.size(); ++v) as_is[v] = static_cast<float>(v);
+  ImageF out;
   out.allocate(640, 480);
-  und.undistort_depth(depth.data(), &out);
+  und.undistort_depth(depth.data(), as_is.data(), &out);
   for (size_t i = 0; i < depth.size(); i += 997) EXPECT_EQ(out.data()[i], depth[i]);
   // With distortion, every output depth is one of the input values (no interpolation).
   Undistorter d;
   d.init(kK, kFr1);
   std::vector<uint16_t> two(640 * 480);
   for (size_t i = 0; i < two.size(); ++i) two[i] = (i / 640) % 2 ? 1000 : 3000;
-  d.undistort_depth(two.data(), &out);
+  d.undistort_depth(two.data(), as_is.data(), &out);
   for (int i = 0; i < out.size(); ++i) {
-    const uint16_t v = out.data()[i];
-    EXPECT_TRUE(v == 0 || v == 1000 || v == 3000) << v;
+    const float v = out.data()[i];
+    EXPECT_TRUE(v == 0.f || v == 1000.f || v == 3000.f) << v;
   }
 }
 

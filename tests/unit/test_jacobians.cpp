@@ -49,8 +49,7 @@ bool residual(const ImageF& img, const PinholeIntrinsics& k, const TrackPoint& p
 }
 
 void check_jacobians(const Fixture& fx, bool geometric, int level) {
-  const FixedVector<TrackPoint>& pts =
-      geometric ? fx.kf.geometric[level] : fx.kf.photometric(level);
+  const TrackPoints& pts = geometric ? fx.kf.geometric[level] : fx.kf.photometric(level);
   const ImageF& img = geometric ? fx.pyramid.inverse_depth(level) : fx.pyramid.gray(level);
   const PinholeIntrinsics& k = fx.pyramid.intrinsics(level);
   ASSERT_GT(pts.size(), 50);

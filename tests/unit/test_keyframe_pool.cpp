@@ -54,7 +54,7 @@ TEST_F(KeyframePoolTest, AHandleToARecycledKeyframeReadsAsGone) {
 TEST_F(KeyframePoolTest, APublishedMapIsAdoptedOnceBetweenFrames) {
   Keyframe* a = pool.acquire(nullptr);
   EXPECT_FALSE(pool.adopt_map(a));
-  const FixedVector<TrackPoint>* before = &a->photometric(0);
+  const TrackPoints* before = &a->photometric(0);
   EXPECT_EQ(a->inactive_photometric(), &a->photometric_sets[1][0]);
   pool.publish_map(pool.handle(a));
   EXPECT_TRUE(pool.adopt_map(a));

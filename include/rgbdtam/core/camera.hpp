@@ -64,13 +64,14 @@ class Undistorter {
   bool is_identity() const { return identity_; }
   // Bilinear for intensities; pixels whose source lies outside the raw image become 0.
   void undistort_gray(const uint8_t* raw, ImageF* out_unit) const;
-  // Nearest-neighbour for depth, so no depth is invented across discontinuities.
-  void undistort_depth(const uint16_t* raw, ImageU16* out) const;
+  // Nearest-neighbour for depth, so no depth is invented across discontinuities; each raw value
+  // is mapped through `table` (65536 entries) on the way.
+  void undistort_depth(const uint16_t* raw, const float* table, ImageF* out) const;
 
  private:
   static constexpr int kTapOne = 1 << 14;  // fixed-point 1 of the bilinear weights
   struct BilinearTap {
-    int32_t index;  // top-left source pixel, or -1 when outside
+    int32_t index;  // top-left source pixel (0 with zero weights when outside)
     uint16_t w[4];  // weights of the top-left, top-right, bottom-left, bottom-right pixels
   };
   std::unique_ptr<BilinearTap[]> taps_;

@@ -20,9 +20,11 @@ class FramePyramid {
 
   // gray[0] must already hold the undistorted [0,1] image; this builds the coarser levels.
   void build_gray();
-  // Converts undistorted raw depth (units of 1/depth_factor m) to inverse depth and builds
-  // the coarser levels. A pixel outside the range is invalid (0).
-  void build_inverse_depth(const ImageU16& depth);
+  // Converts raw depth (units of 1/depth_factor m) to inverse depth, undistorting it on the way,
+  // and builds the coarser levels. A pixel outside the range is invalid (0).
+  void build_inverse_depth(const uint16_t* raw, const Undistorter& undistorter);
+  // The same for depth that needs no undistortion (synthetic images).
+  void build_inverse_depth(const ImageU16& undistorted);
   void clear_depth();
   // For a map other than the sensor's: write level 0 here, then build the coarser levels.
   ImageF& inverse_depth_level0() { return inv_depth_[0]; }

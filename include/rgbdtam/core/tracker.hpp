@@ -5,12 +5,14 @@
 // SE(3) over a 4-level pyramid. All buffers are sized in allocate(); track() never allocates.
 
 #include <cstdint>
+#include <memory>
 
 #include "rgbdtam/core/canny.hpp"
 #include "rgbdtam/core/fixed_vector.hpp"
 #include "rgbdtam/core/pyramid.hpp"
 #include "rgbdtam/core/residuals.hpp"
 #include "rgbdtam/core/se3.hpp"
+#include "rgbdtam/core/track_points.hpp"
 
 namespace rgbdtam {
 
@@ -38,13 +40,6 @@ struct TrackerOptions {
   bool motion_model = true;
 };
 
-// One residual point of a keyframe, in the keyframe's camera frame.
-struct TrackPoint {
-  float x, y, z;  // m
-  float ref;      // keyframe intensity [0,1], or keyframe inverse depth 1/m
-  float J[6];     // d residual / d (v, omega) at the identity, keyframe side
-};
-
 // A point of a keyframe's mapped depth, in the keyframe's camera frame, m.
 struct MapPoint {
   float x, y, z;
@@ -58,17 +53,15 @@ struct Keyframe {
   uint32_t id = 0;
   int64_t timestamp_ns = 0;
   SE3 T_w_k;
-  FixedVector<TrackPoint> photometric_sets[2][kPyramidLevels];
-  FixedVector<TrackPoint> geometric[kPyramidLevels];  // sensor depth only
+  TrackPoints photometric_sets[2][kPyramidLevels];
+  TrackPoints geometric[kPyramidLevels];  // sensor depth only
   int active_photometric = 0;
   FixedVector<MapPoint> map_points;  // the mapper's fused edge map, with the inactive set
 
-  const FixedVector<TrackPoint>& photometric(int level) const {
+  const TrackPoints& photometric(int level) const {
     return photometric_sets[active_photometric][level];
   }
-  FixedVector<TrackPoint>* inactive_photometric() {
-    return photometric_sets[1 - active_photometric];
-  }
+  TrackPoints* inactive_photometric() { return photometric_sets[1 - active_photometric]; }
   void swap_photometric() { active_photometric = 1 - active_photometric; }
 };
 
@@ -85,8 +78,7 @@ class KeyframeBuilder {
              Keyframe* kf, const FramePyramid* photometric_depth = nullptr);
   // Photometric points only, into sets[0 .. kPyramidLevels), from the frame's (fused) depth;
   // edges: the frame's level-0 Canny edges, already found when it became a keyframe.
-  void build_photometric(const FramePyramid& frame, const ImageU8& edges,
-                         FixedVector<TrackPoint>* sets);
+  void build_photometric(const FramePyramid& frame, const ImageU8& edges, TrackPoints* sets);
   // Level-0 Canny edges of the last prepared frame.
   const ImageU8& edges() const { return edges_[0]; }
 
@@ -94,8 +86,8 @@ class KeyframeBuilder {
   // Edges, gradients and thresholds of every level; level-0 edges are detected unless given.
   void prepare(const FramePyramid& frame, const ImageU8* edges = nullptr);
   void select_photometric(const FramePyramid& frame, const FramePyramid& depth, int level,
-                          FixedVector<TrackPoint>* out);
-  void select_geometric(const FramePyramid& frame, int level, FixedVector<TrackPoint>* out);
+                          TrackPoints* out);
+  void select_geometric(const FramePyramid& frame, int level, TrackPoints* out);
   bool is_semidense_pixel(int level, int x, int y) const;
 
   TrackerOptions opt_;
@@ -176,12 +168,13 @@ class Tracker {
     int total = 0;
     Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
     Vector6d g = Vector6d::Zero();
+    bool has_normal_equations = false;  // H and g are formed
   };
   LevelCost evaluate_level(const Keyframe& kf, const FramePyramid& frame, int level,
                            const SE3& T_c_k, bool new_scale);
-  const FixedVector<TrackPoint>& photometric_points(const Keyframe& kf, int level) const;
-  const FixedVector<TrackPoint>& geometric_points(const Keyframe& kf, const FramePyramid& frame,
-                                                  int level) const;
+  const TrackPoints& photometric_points(const Keyframe& kf, int level) const;
+  const TrackPoints& geometric_points(const Keyframe& kf, const FramePyramid& frame,
+                                      int level) const;
   // Gauss-Newton on one level from T_c_k; the scratch buffers end at the returned pose.
   LevelCost optimize_level(const Keyframe& kf, const FramePyramid& frame, int level, SE3* T_c_k,
                            bool new_scale, int max_iterations, int* iterations);
@@ -189,20 +182,30 @@ class Tracker {
                     float reference_sigma, TrackResult* out);
   void motion_stats(const Keyframe& kf, const FramePyramid& frame, const SE3& T_c_k,
                     double* visible, double* parallax);
-  void sample_photometric(const FixedVector<TrackPoint>& pts, const ImageF& img,
-                          const PinholeIntrinsics& k, const SE3& T_c_k);
-  void sample_geometric(const FixedVector<TrackPoint>& pts, const ImageF& inv_depth,
-                        const PinholeIntrinsics& k, const SE3& T_c_k);
-  void estimate_gain_brightness(const FixedVector<TrackPoint>& pts);
+  // Projects every point at the level: u, v and 1/z into proj_*; u = kOutside where the point
+  // is behind the camera or out of the image's bilinear range.
+  void project(const TrackPoints& pts, const PinholeIntrinsics& k, int width_px, int height_px,
+               const SE3& T_c_k);
+  void sample_photometric(const TrackPoints& pts, const ImageF& img);
+  void sample_geometric(const TrackPoints& pts, const ImageF& inv_depth);
+  void estimate_gain_brightness(const TrackPoints& pts);
   float mad_sigma(int count);
   void update_scales(int level, int n_photometric, int n_geometric);
-  LevelCost accumulate(const FixedVector<TrackPoint>& ph, const FixedVector<TrackPoint>& geo);
+  // The term's rows (row_weight_, row_residual_) and costs (point_cost_) from its residuals;
+  // returns how many points have one.
+  int weigh(const TrackPoints& pts, bool geometric);
+  LevelCost measure(const TrackPoints& ph, const TrackPoints& geo);
+  void add_normal_equations_of(const TrackPoints& ph, const TrackPoints& geo, LevelCost* c);
 
   TrackerOptions opt_;
-  // Per-point scratch, indexed like the keyframe's point sets.
-  const FixedVector<TrackPoint> no_points_;  // stands in for the geometric set without depth
-  FixedVector<float> ph_sample_, ph_residual_, geo_residual_, geo_sigma_,
-      scratch_;  // scratch: max(ph, geo)
+  const TrackPoints no_points_;  // stands in for the geometric set without depth
+  // Per-point scratch, indexed like the keyframe's point sets, padded like them.
+  std::unique_ptr<float[]> proj_u_, proj_v_, proj_inverse_z_;
+  std::unique_ptr<float[]> ph_sample_, ph_residual_, geo_residual_;
+  std::unique_ptr<float[]> geo_inverse_sigma_;  // 0 where a point has no residual
+  std::unique_ptr<float[]> corners_[4];         // inverse depths around each projection
+  std::unique_ptr<float[]> row_weight_, row_residual_, point_cost_;  // normal equations' rows
+  std::unique_ptr<float[]> scratch_;                                 // medians
   float gain_ = 1.f, brightness_ = 0.f, ph_sigma_ = 0.05f;
   float geo_scale_ = 1.f;      // geometric spread in sensor-model standard deviations
   uint8_t terms_ = kAllTerms;  // of the current track

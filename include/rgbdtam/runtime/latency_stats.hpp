@@ -15,11 +15,13 @@ class LatencyStats {
   int64_t count() const { return count_; }
   double percentile_ms(double p) const;  // p in [0, 1]
   double max_ms() const { return static_cast<double>(max_ns_) * 1e-6; }
+  double mean_ms() const { return count_ > 0 ? static_cast<double>(sum_ns_) * 1e-6 / count_ : 0.0; }
 
  private:
   uint32_t bins_[kBins];
   int64_t count_ = 0;
   int64_t max_ns_ = 0;
+  int64_t sum_ns_ = 0;
 };
 
 }  // namespace rgbdtam

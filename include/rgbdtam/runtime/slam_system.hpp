@@ -34,8 +34,10 @@ class SlamSystem {
   // track() then map_pending().
   PoseEstimate process(const SensorFrame& frame);
   PoseEstimate track(const SensorFrame& frame) { return tracking_.process(frame); }
-  // Synchronous mode: the mapper's and loop module's steps for what the tracker queued.
-  // Threaded: a wake-up.
+  // After the pose is out: the keyframe the frame asked for (if it did not, nothing) ...
+  void build_pending_keyframe() { tracking_.build_pending_keyframe(); }
+  // ... then, synchronous mode: the mapper's and loop module's steps for what the tracker
+  // queued; threaded: a wake-up. Builds the pending keyframe first if it is still due.
   void map_pending();
   // Lets the mapper finish what is queued and the keyframe in progress.
   void finish();

@@ -39,6 +39,9 @@ class TrackingPipeline {
   // keyframes: the dense keyframe store, allocated here, shared with the mapper.
   Status init(const Params& params, KeyframePool* keyframes);
   PoseEstimate process(const SensorFrame& frame);
+  // The keyframe a frame asked for is built after its pose is out: here, or at the next
+  // process() at the latest. Until then the previous keyframe stays the reference.
+  void build_pending_keyframe();
   // Every tracked frame is offered to the mapper through this queue (never waiting on it).
   void connect_mapper(MapperQueue* queue) { mapper_queue_ = queue; }
   // New keyframes go to the loop module; its corrections come back; lost frames are looked up
@@ -75,7 +78,7 @@ class TrackingPipeline {
   Keyframe* keyframe_from_last_valid_frame();
   void accept(const Attempt& a, const SensorFrame& frame, PoseEstimate* out);
   void on_lost(const SensorFrame& frame, uint32_t failed, PoseEstimate* out);
-  void start_keyframe(const SensorFrame& frame, const SE3& T_w_c, PoseEstimate* out,
+  void start_keyframe(int64_t timestamp_ns, const SE3& T_w_c, PoseEstimate* out,
                       bool after_reset = false);
   void offer_to_mapper(const PoseEstimate& pose, bool new_keyframe);
   void propagate_map(const SE3& T_w_c);
@@ -96,7 +99,6 @@ class TrackingPipeline {
   };
   LocalMap local_maps_[2];
   int next_local_map_ = 0;
-  ImageU16 depth_undistorted_;
   KeyframeBuilder builder_;
   KeyframePool* pool_ = nullptr;
   Tracker tracker_;
@@ -113,6 +115,12 @@ class TrackingPipeline {
   uint32_t pending_flags_ = 0;     // for the next output: a correction moved the map
   int64_t withhold_until_ns_ = 0;  // poses up to this time are tracked but not reported valid
   uint32_t next_keyframe_id_ = 0;
+  struct PendingKeyframe {
+    bool due = false;
+    int frame_buffer = 0;  // frames_[frame_buffer] is the keyframe's frame
+    PoseEstimate pose;     // the frame's, offered to the mapper with the keyframe
+  };
+  PendingKeyframe pending_keyframe_;
   // The last valid pose and the camera's twist (v, omega per second) before it.
   SE3 T_w_last_;
   int64_t last_ns_ = 0;
