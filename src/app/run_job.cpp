@@ -262,10 +262,10 @@ void RunJob::print_summary() const {
               std::strcmp(board_.link_kind, "udp") == 0 ? board_.link_udp_remote
                                                         : board_.link_serial_device);
   std::printf(
-      "frames: %u in %.1f s (%.1f Hz); tracked %u, lost %u; sensor errors %u, dropped "
-      "(newest kept) %u\n",
+      "frames: %u in %.1f s (%.1f Hz); tracked %u, lost %u; sensor errors %u (%u not posted: "
+      "the outage was reported lately), dropped (newest kept) %u\n",
       c.frames, seconds, seconds > 0 ? c.frames / seconds : 0.0, c.tracked, c.lost, c.sensor_errors,
-      sensor_.live->dropped());
+      c.sensor_texts_withheld, sensor_.live->dropped());
   const RecoveryCounters& r = sensor_.recovery.counters();
   std::printf(
       "sensor recovery: %u stalls, %u USB resets (%u failed), %u reopens (%u failed), %u "

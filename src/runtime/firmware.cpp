@@ -89,6 +89,15 @@ PoseEstimate FirmwareRuntime::on_frame(const SensorFrame& frame, int64_t arrival
 void FirmwareRuntime::on_sensor_error(const Status& error, int64_t now_ns) {
   ++counters_.sensor_errors;
   fault_until_ns_ = now_ns + 2'000'000'000;
+  // A sensor that fails every read would flood the link and the operator's log: one message
+  // when an outage starts, then one per interval while it lasts.
+  constexpr int64_t kSensorTextIntervalNs = 5'000'000'000;
+  if (sensor_text_posted_ && now_ns - sensor_text_ns_ < kSensorTextIntervalNs) {
+    ++counters_.sensor_texts_withheld;
+    return;
+  }
+  sensor_text_posted_ = true;
+  sensor_text_ns_ = now_ns;
   char text[mavlink::kMaxStatusTextChars + 1];
   std::snprintf(text, sizeof(text), "sensor: %s", error.message());
   post_event(mavlink::kMavSeverityError, text);
@@ -96,6 +105,7 @@ void FirmwareRuntime::on_sensor_error(const Status& error, int64_t now_ns) {
 
 void FirmwareRuntime::on_sensor_recovered(int64_t outage_ns) {
   ++counters_.sensor_recoveries;
+  sensor_text_posted_ = false;  // the next outage is reported at once
   char text[mavlink::kMaxStatusTextChars + 1];
   std::snprintf(text, sizeof(text), "sensor: frames again after %lld ms",
                 static_cast<long long>(outage_ns / 1'000'000));

@@ -303,6 +303,35 @@ TEST(Firmware, TrackingLostAndRegainedAreReportedOnceEach) {
   std::printf("STATUSTEXT: '%s'\n", texts[0].c_str());
 }
 
+TEST(Firmware, ASensorFailingEveryReadIsReportedOncePerOutageNotPerRead) {
+  testing::SyntheticScene scene = testing::SyntheticScene::half_resolution();
+  Params params;
+  ASSERT_TRUE(parse_params(testing::synthetic_config(scene).c_str(), "synthetic", &params).is_ok());
+  params.map_enabled = false;
+  Board board;
+  ASSERT_TRUE(parse_board("board.name = test\nbuild.preset = host-release\nboard.cpu_count = 1\n"
+                          "sensor.kind = replay\nsensor.device = x\nsensor.config = y\n"
+                          "link.kind = udp\nlink.udp_remote = 127.0.0.1:9\n",
+                          "test", ".", &board)
+                  .is_ok());
+  CaptureLink link;
+  FakeGpio gpio;
+  FirmwareRuntime runtime;
+  ASSERT_TRUE(runtime.init(params, board, &link, &gpio, [] { return int64_t{0}; }).is_ok());
+  const Status unplugged = Status::error(StatusCode::kIoError, "device unplugged");
+  constexpr int64_t kFrameNs = 33'000'000;
+  for (int i = 0; i < 60; ++i) runtime.on_sensor_error(unplugged, i * kFrameNs);  // 2 s
+  EXPECT_EQ(runtime.counters().status_texts, 1u) << "one message for the outage";
+  for (int i = 60; i < 240; ++i) runtime.on_sensor_error(unplugged, i * kFrameNs);  // 8 s in
+  EXPECT_EQ(runtime.counters().status_texts, 2u) << "and one more 5 s later";
+  runtime.on_sensor_recovered(240 * kFrameNs);
+  runtime.on_sensor_error(unplugged, 241 * kFrameNs);  // a new outage is news at once
+  const FirmwareCounters& c = runtime.counters();
+  EXPECT_EQ(c.status_texts, 4u);
+  EXPECT_EQ(c.sensor_errors, 241u);
+  EXPECT_EQ(c.sensor_texts_withheld, 241u - 3u);
+}
+
 TEST(Firmware, HostEmulationOverASerialPortAt115200CarriesEveryPose) {
   // The link on a pseudo-terminal as the robot's UART; this test reads the other end.
   int master = -1, slave = -1;

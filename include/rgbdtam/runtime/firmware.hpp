@@ -25,8 +25,9 @@ struct FirmwareCounters {
   uint32_t lost = 0;
   uint32_t deadline_misses = 0;
   uint32_t sensor_errors = 0;
-  uint32_t sensor_recoveries = 0;  // frames flowing again after a stall
-  uint32_t status_texts = 0;       // events posted to the link
+  uint32_t sensor_recoveries = 0;      // frames flowing again after a stall
+  uint32_t status_texts = 0;           // events posted to the link
+  uint32_t sensor_texts_withheld = 0;  // sensor errors not posted: one already was, lately
 };
 
 class FirmwareRuntime {
@@ -66,6 +67,8 @@ class FirmwareRuntime {
   LinkTask link_;
   StatusLed led_;
   LatencyStats tracker_time_;
+  bool sensor_text_posted_ = false;  // this outage has been reported, at sensor_text_ns_
+  int64_t sensor_text_ns_ = 0;
   FirmwareCounters counters_;
   bool lost_ = false;
   bool pool_full_reported_ = false;
