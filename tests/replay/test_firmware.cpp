@@ -248,22 +248,29 @@ class CaptureLink : public ByteLink {
   std::vector<uint8_t> bytes_;
 };
 
-TEST(Firmware, TrackingLostAndRegainedAreReportedOnceEach) {
-  testing::SyntheticScene scene = testing::SyntheticScene::half_resolution();
+// A firmware runtime on the synthetic camera without mapping, its link captured, its clock at 0.
+void init_bare_runtime(const testing::SyntheticScene& scene, CaptureLink* link, FakeGpio* gpio,
+                       FirmwareRuntime* runtime) {
   Params params;
   ASSERT_TRUE(parse_params(testing::synthetic_config(scene).c_str(), "synthetic", &params).is_ok());
   params.sensor.disparity_sigma_px = 0.1;
-  params.map_enabled = false;  // tracking health is what this test is about
+  params.map_enabled = false;
   Board board;
   ASSERT_TRUE(parse_board("board.name = test\nbuild.preset = host-release\nboard.cpu_count = 1\n"
                           "sensor.kind = replay\nsensor.device = x\nsensor.config = y\n"
                           "link.kind = udp\nlink.udp_remote = 127.0.0.1:9\n",
                           "test", ".", &board)
                   .is_ok());
+  ASSERT_TRUE(runtime->init(params, board, link, gpio, [] { return int64_t{0}; }).is_ok());
+}
+
+TEST(Firmware, TrackingLostAndRegainedAreReportedOnceEach) {
+  testing::SyntheticScene scene = testing::SyntheticScene::half_resolution();
   CaptureLink link;
   FakeGpio gpio;
   FirmwareRuntime runtime;
-  ASSERT_TRUE(runtime.init(params, board, &link, &gpio, [] { return int64_t{0}; }).is_ok());
+  // Tracking health is what this test is about.
+  ASSERT_NO_FATAL_FAILURE(init_bare_runtime(scene, &link, &gpio, &runtime));
   ASSERT_TRUE(runtime.start().is_ok());
   const auto& frames = scene.render_path(20, 10.0);
   const std::vector<uint8_t> black(frames[0].gray.size(), 0);
@@ -304,20 +311,11 @@ TEST(Firmware, TrackingLostAndRegainedAreReportedOnceEach) {
 }
 
 TEST(Firmware, ASensorFailingEveryReadIsReportedOncePerOutageNotPerRead) {
-  testing::SyntheticScene scene = testing::SyntheticScene::half_resolution();
-  Params params;
-  ASSERT_TRUE(parse_params(testing::synthetic_config(scene).c_str(), "synthetic", &params).is_ok());
-  params.map_enabled = false;
-  Board board;
-  ASSERT_TRUE(parse_board("board.name = test\nbuild.preset = host-release\nboard.cpu_count = 1\n"
-                          "sensor.kind = replay\nsensor.device = x\nsensor.config = y\n"
-                          "link.kind = udp\nlink.udp_remote = 127.0.0.1:9\n",
-                          "test", ".", &board)
-                  .is_ok());
   CaptureLink link;
   FakeGpio gpio;
   FirmwareRuntime runtime;
-  ASSERT_TRUE(runtime.init(params, board, &link, &gpio, [] { return int64_t{0}; }).is_ok());
+  ASSERT_NO_FATAL_FAILURE(
+      init_bare_runtime(testing::SyntheticScene::half_resolution(), &link, &gpio, &runtime));
   const Status unplugged = Status::error(StatusCode::kIoError, "device unplugged");
   constexpr int64_t kFrameNs = 33'000'000;
   for (int i = 0; i < 60; ++i) runtime.on_sensor_error(unplugged, i * kFrameNs);  // 2 s
