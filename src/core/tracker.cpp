@@ -186,10 +186,10 @@ void Tracker::allocate(const Keyframe& model, const TrackerOptions& opt) {
     n = std::max(n, model.geometric[l].capacity());
   }
   n = TrackPoints::round_up(n, TrackPoints::kBlock);
-  for (auto* buffer :
-       {&proj_u_, &proj_v_, &proj_inverse_z_, &ph_sample_, &ph_residual_, &geo_residual_,
-        &geo_inverse_sigma_, &corners_[0], &corners_[1], &corners_[2], &corners_[3], &row_weight_,
-        &row_residual_, &point_cost_, &scratch_}) {
+  for (auto* buffer : {&proj_u_, &proj_v_, &proj_inverse_z_, &ph_sample_, &ph_residual_,
+                       &geo_residual_, &geo_inverse_sigma_, &corners_[0], &corners_[1],
+                       &corners_[2], &corners_[3], &row_weight_[0], &row_weight_[1],
+                       &row_residual_[0], &row_residual_[1], &point_cost_, &scratch_}) {
     buffer->reset(new float[static_cast<size_t>(n)]());
   }
 }
@@ -314,8 +314,9 @@ int Tracker::weigh(const TrackPoints& pts, bool geometric) {
     for (int i = 0; i < n; ++i) inv_sigma[i] = ph_sample_[i] == kInvalid ? 0.f : inv_ph_sigma;
   }
   const float* residual = geometric ? geo_residual_.get() : ph_residual_.get();
-  return weigh_rows(residual, inv_sigma, n, GemanMcClure(opt_.robust_c), row_weight_.get(),
-                    row_residual_.get(), point_cost_.get());
+  return weigh_rows(residual, inv_sigma, n, GemanMcClure(opt_.robust_c),
+                    row_weight_[geometric].get(), row_residual_[geometric].get(),
+                    point_cost_.get());
 }
 
 Tracker::LevelCost Tracker::measure(const TrackPoints& ph, const TrackPoints& geo) {
@@ -338,13 +339,12 @@ Tracker::LevelCost Tracker::measure(const TrackPoints& ph, const TrackPoints& ge
 }
 
 void Tracker::add_normal_equations_of(const TrackPoints& ph, const TrackPoints& geo, LevelCost* c) {
+  // The rows measure() weighed for this evaluation: the scratch buffers hold it.
   c->H.setZero();
   c->g.setZero();
-  (void)weigh(ph, false);
-  add_normal_equations(ph, row_weight_.get(), row_residual_.get(), 1.0, &c->H, &c->g);
-  (void)weigh(geo, true);
-  add_normal_equations(geo, row_weight_.get(), row_residual_.get(), opt_.geometric_weight, &c->H,
-                       &c->g);
+  add_normal_equations(ph, row_weight_[0].get(), row_residual_[0].get(), 1.0, &c->H, &c->g);
+  add_normal_equations(geo, row_weight_[1].get(), row_residual_[1].get(), opt_.geometric_weight,
+                       &c->H, &c->g);
   c->has_normal_equations = true;
 }
 

@@ -191,8 +191,8 @@ class Tracker {
   void estimate_gain_brightness(const TrackPoints& pts);
   float mad_sigma(int count);
   void update_scales(int level, int n_photometric, int n_geometric);
-  // The term's rows (row_weight_, row_residual_) and costs (point_cost_) from its residuals;
-  // returns how many points have one.
+  // The term's rows (row_weight_[term], row_residual_[term]; photometric 0, geometric 1) and
+  // costs (point_cost_) from its residuals; returns how many points have one.
   int weigh(const TrackPoints& pts, bool geometric);
   LevelCost measure(const TrackPoints& ph, const TrackPoints& geo);
   void add_normal_equations_of(const TrackPoints& ph, const TrackPoints& geo, LevelCost* c);
@@ -204,8 +204,9 @@ class Tracker {
   std::unique_ptr<float[]> ph_sample_, ph_residual_, geo_residual_;
   std::unique_ptr<float[]> geo_inverse_sigma_;  // 0 where a point has no residual
   std::unique_ptr<float[]> corners_[4];         // inverse depths around each projection
-  std::unique_ptr<float[]> row_weight_, row_residual_, point_cost_;  // normal equations' rows
-  std::unique_ptr<float[]> scratch_;                                 // medians
+  // The normal equations' rows of each term at the last measured evaluation, and the costs.
+  std::unique_ptr<float[]> row_weight_[2], row_residual_[2], point_cost_;
+  std::unique_ptr<float[]> scratch_;  // medians
   float gain_ = 1.f, brightness_ = 0.f, ph_sigma_ = 0.05f;
   float geo_scale_ = 1.f;      // geometric spread in sensor-model standard deviations
   uint8_t terms_ = kAllTerms;  // of the current track
