@@ -5,10 +5,10 @@
 // OpenCV's time is its odometry call alone, each frame's pyramid built once (its frame cache);
 // it gets the images undecoded already and does not undistort, so the comparison favours it.
 // A host tool: OpenCV (Debian's contrib packages) is linked dynamically, never into rgbdtam.
-#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -22,17 +22,6 @@
 
 namespace rgbdtam {
 namespace {
-
-struct Timing {
-  std::vector<double> ms;
-  double percentile(double p) {
-    if (ms.empty()) return 0.0;
-    std::vector<double> sorted = ms;
-    const size_t k = std::min(sorted.size() - 1, static_cast<size_t>(p * sorted.size()));
-    std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(k), sorted.end());
-    return sorted[k];
-  }
-};
 
 int fail(const char* what) {
   std::fprintf(stderr, "rgbdtam-vs-opencv: %s\n", what);
@@ -49,7 +38,7 @@ std::vector<double> frame_stamps(const TumReplaySource& source) {
 
 // Ours: the replay path of `rgbdtam replay`, its tracking time (decoded frame to pose).
 bool run_ours(const std::string& sequence, const Params& params, int max_frames,
-              std::vector<StampedPose>* estimates, std::vector<double>* stamps, Timing* t) {
+              std::vector<StampedPose>* estimates, std::vector<double>* stamps, LatencyStats* t) {
   ReplayOptions opt;
   opt.sequence = sequence.c_str();
   opt.params = params;
@@ -60,15 +49,14 @@ bool run_ours(const std::string& sequence, const Params& params, int max_frames,
   while (job.step()) {
   }
   if (!job.finish().is_ok()) return false;
-  // The per-frame times are the job's own histogram: percentiles, not raw samples.
-  t->ms = {job.tracking_time().percentile_ms(0.5), job.tracking_time().percentile_ms(0.95)};
+  *t = job.tracking_time();
   *estimates = job.estimates();
   *stamps = frame_stamps(job.source());
   return true;
 }
 
 bool run_opencv(const std::string& sequence, const Params& params, int max_frames,
-                std::vector<StampedPose>* estimates, Timing* t) {
+                std::vector<StampedPose>* estimates, LatencyStats* t) {
   TumReplaySource source;
   const Status s =
       source.open(sequence.c_str(), params.camera.width_px, params.camera.height_px,
@@ -101,7 +89,7 @@ bool run_opencv(const std::string& sequence, const Params& params, int max_frame
       const auto t0 = std::chrono::steady_clock::now();
       const bool ok = odometry->compute(previous, current, Rt);
       const auto t1 = std::chrono::steady_clock::now();
-      t->ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+      t->add(std::chrono::duration_cast<std::chrono::nanoseconds>(t1 - t0).count());
       if (ok) {
         T_w_c = T_w_c * Rt.inv();  // Rt maps the previous camera's points into the current's
         Eigen::Matrix4d T;
@@ -144,17 +132,20 @@ int run(int argc, char** argv) {
 
   std::vector<StampedPose> ours, theirs, gt;
   std::vector<double> stamps;
-  Timing ours_ms, opencv_ms;
-  if (!run_ours(sequence, params, max_frames, &ours, &stamps, &ours_ms))
+  // The replay job's histogram of tracking times, and the same for OpenCV (large: on the heap).
+  auto ours_ms = std::make_unique<LatencyStats>();
+  auto opencv_ms = std::make_unique<LatencyStats>();
+  if (!run_ours(sequence, params, max_frames, &ours, &stamps, ours_ms.get()))
     return fail("replay failed");
-  if (!run_opencv(sequence, params, max_frames, &theirs, &opencv_ms)) return 1;
+  if (!run_opencv(sequence, params, max_frames, &theirs, opencv_ms.get())) return 1;
   int bad = 0;
   s = read_tum_trajectory((sequence + "/groundtruth.txt").c_str(), &gt, &bad);
   if (!s.is_ok()) return fail(s.message());
   const EvaluationReport a = evaluate_all(gt, ours, &stamps);
   const EvaluationReport b = evaluate_all(gt, theirs, &stamps);
-  const double ours_median = ours_ms.ms[0], ours_p95 = ours_ms.ms[1];
-  const double cv_median = opencv_ms.percentile(0.5), cv_p95 = opencv_ms.percentile(0.95);
+  const double ours_median = ours_ms->percentile_ms(0.5), ours_p95 = ours_ms->percentile_ms(0.95);
+  const double cv_median = opencv_ms->percentile_ms(0.5);
+  const double cv_p95 = opencv_ms->percentile_ms(0.95);
   std::printf("| system | frames | coverage | ATE cm (all frames) | median ms | p95 ms |\n");
   std::printf("|---|---|---|---|---|---|\n");
   std::printf("| rgbdtam | %zu | %.1f %% | %.2f | %.2f | %.2f |\n", stamps.size(),
