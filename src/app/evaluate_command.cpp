@@ -6,6 +6,7 @@
 
 #include "json_line.hpp"
 #include "rgbdtam/hal/tum_trajectory.hpp"
+#include "trajectory_plot.hpp"
 
 namespace rgbdtam {
 
@@ -86,12 +87,15 @@ int evaluate_command(int argc, char** argv) {
   const char* gt_path = nullptr;
   const char* est_path = nullptr;
   const char* frames_path = nullptr;
+  const char* plot_path = nullptr;
   bool json = false;
   for (int i = 0; i < argc; ++i) {
     if (std::strcmp(argv[i], "--json") == 0) {
       json = true;
     } else if (std::strcmp(argv[i], "--frames") == 0 && i + 1 < argc) {
       frames_path = argv[++i];
+    } else if (std::strcmp(argv[i], "--plot") == 0 && i + 1 < argc) {
+      plot_path = argv[++i];
     } else if (argv[i][0] == '-') {
       std::fprintf(stderr, "rgbdtam eval: unknown option '%s'\n", argv[i]);
       return 2;
@@ -107,7 +111,7 @@ int evaluate_command(int argc, char** argv) {
   if (gt_path == nullptr || est_path == nullptr) {
     std::fprintf(stderr,
                  "usage: rgbdtam eval <groundtruth.txt> <estimate.txt> [--json] "
-                 "[--frames rgb.txt]\n");
+                 "[--frames rgb.txt] [--plot out.svg]\n");
     return 2;
   }
   std::vector<StampedPose> gt, est;
@@ -146,6 +150,20 @@ int evaluate_command(int argc, char** argv) {
   }
   const EvaluationReport r = evaluate_all(gt, est, have_frames ? &stamps : nullptr);
   print_report(r, json, "all poses in the file");
+  if (plot_path != nullptr && r.ate_ok) {
+    PlotInput plot;
+    plot.gt = &gt;
+    plot.est = &est;
+    plot.frame_stamps = have_frames ? &stamps : nullptr;
+    plot.report = &r;
+    plot.title = std::string(est_path) + " against " + gt_path;
+    const Status written = write_trajectory_svg(plot_path, plot);
+    if (!written.is_ok()) {
+      std::fprintf(stderr, "rgbdtam eval: --plot: %s\n", written.message());
+      return 1;
+    }
+    if (!json) std::printf("plot: %s\n", plot_path);
+  }
   return r.ate_ok ? 0 : 1;
 }
 

@@ -4,51 +4,60 @@
 
 namespace rgbdtam {
 
+void write_json_string(std::FILE* out, const char* value) {
+  std::fputc('"', out);
+  for (const unsigned char* c = reinterpret_cast<const unsigned char*>(value); *c != 0; ++c) {
+    if (*c == '"' || *c == '\\') {
+      std::fprintf(out, "\\%c", *c);
+    } else if (*c < 0x20) {
+      std::fprintf(out, "\\u%04x", *c);
+    } else {
+      std::fputc(*c, out);
+    }
+  }
+  std::fputc('"', out);
+}
+
 void JsonLine::key(const char* name) {
-  std::printf("%s\"%s\": ", first_ ? "{" : ", ", name);
+  std::fprintf(out_, "%s\"%s\": ", first_ ? "{" : ", ", name);
   first_ = false;
 }
 
 JsonLine& JsonLine::text(const char* name, const char* value) {
   key(name);
-  std::putchar('"');
-  for (const unsigned char* c = reinterpret_cast<const unsigned char*>(value); *c != 0; ++c) {
-    if (*c == '"' || *c == '\\') {
-      std::printf("\\%c", *c);
-    } else if (*c < 0x20) {
-      std::printf("\\u%04x", *c);
-    } else {
-      std::putchar(*c);
-    }
-  }
-  std::putchar('"');
+  write_json_string(out_, value);
   return *this;
 }
 
 JsonLine& JsonLine::number(const char* name, double value, int decimals) {
   key(name);
   if (std::isfinite(value)) {
-    std::printf("%.*f", decimals, value);
+    std::fprintf(out_, "%.*f", decimals, value);
   } else {
-    std::printf("null");
+    std::fprintf(out_, "null");
   }
   return *this;
 }
 
 JsonLine& JsonLine::integer(const char* name, long long value) {
   key(name);
-  std::printf("%lld", value);
+  std::fprintf(out_, "%lld", value);
   return *this;
 }
 
 JsonLine& JsonLine::boolean(const char* name, bool value) {
   key(name);
-  std::printf("%s", value ? "true" : "false");
+  std::fprintf(out_, "%s", value ? "true" : "false");
   return *this;
 }
 
+std::FILE* JsonLine::member(const char* name) {
+  key(name);
+  return out_;
+}
+
 void JsonLine::end() {
-  std::printf(first_ ? "{}\n" : "}\n");
+  std::fprintf(out_, first_ ? "{}\n" : "}\n");
   first_ = true;
 }
 

@@ -31,6 +31,7 @@ void usage() {
                "                 [--final-trajectory out.txt] [--map map.ply]\n"
                "                 [--set key=value]... [--max-frames N] [--quiet] [--json]\n"
                "  rgbdtam eval <groundtruth.txt> <estimate.txt> [--json] [--frames rgb.txt]\n"
+               "               [--plot out.svg]\n"
                "  rgbdtam params --config <file> [--set key=value]...\n"
                "  rgbdtam run --board <board-folder> [--board-set key=value]...\n"
                "              [--set key=value]... [--max-frames N] [--quiet]\n"

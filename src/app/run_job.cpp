@@ -47,6 +47,17 @@ Status load_board_and_params(const RunOptions& options, Board* board, Params* pa
   return apply_board_capacity(*board, params);
 }
 
+bool sensor_backend_in_build(const char* kind) {
+  const size_t n = std::strlen(kind);
+  for (const char* at = RGBDTAM_HAL_BACKENDS; *at != '\0';) {
+    const char* end = std::strchr(at, ' ');
+    if (end == nullptr) end = at + std::strlen(at);
+    if (static_cast<size_t>(end - at) == n && std::strncmp(at, kind, n) == 0) return true;
+    at = *end == ' ' ? end + 1 : end;
+  }
+  return false;
+}
+
 namespace {
 // How long a device backend waits for a frame before next() reports it (a stall is longer).
 constexpr int kFrameTimeoutMs = 1000;
@@ -73,9 +84,10 @@ Status open_backend(const Board& board, const Params& params, BoardSensor* senso
     }
     std::snprintf(depth, sizeof(depth), "%.*s", static_cast<int>(comma - board.sensor_device),
                   board.sensor_device);
-    RGBDTAM_RETURN_IF_ERROR(sensor->v4l2.open(v4l2_io != nullptr ? v4l2_io : &sensor->v4l2_io,
-                                              depth, comma + 1, w, h,
-                                              params.sensor.max_rgb_depth_dt_ns, kFrameTimeoutMs));
+    RGBDTAM_RETURN_IF_ERROR(sensor->v4l2.open(
+        v4l2_io != nullptr ? v4l2_io : &sensor->v4l2_io, depth, comma + 1, w, h,
+        params.sensor.max_rgb_depth_dt_ns, kFrameTimeoutMs,
+        std::strcmp(board.sensor_colour, "mjpeg") == 0 ? V4l2Colour::kMjpeg : V4l2Colour::kYuyv));
     sensor->live = &sensor->v4l2;
     return Status::ok();
   }
@@ -86,7 +98,27 @@ Status open_backend(const Board& board, const Params& params, BoardSensor* senso
                                    : FreenectDepth::kRegistered;
     // libfreenect does not document its timestamp unit: the latest of each stream pair up.
     RGBDTAM_RETURN_IF_ERROR(
-        sensor->freenect.open(std::atoi(board.sensor_device), mode, UINT32_MAX / 2));
+        sensor->freenect.open(kFreenectUsb, std::atoi(board.sensor_device), mode, UINT32_MAX / 2));
+    sensor->live = &sensor->freenect;
+    return Status::ok();
+  }
+#endif
+#if RGBDTAM_WITH_FAKENECT
+  if (std::strcmp(board.sensor_kind, "fakenect") == 0) {
+    // fakenect finds its dump through the environment, plays raw disparity only, plays it once
+    // per process, and exits the process when it cannot open the index: checked here first.
+    char index[kTextBytes + 16];
+    std::snprintf(index, sizeof(index), "%s/INDEX.txt", board.sensor_device);
+    std::FILE* file = std::fopen(index, "rb");
+    if (file == nullptr) {
+      return Status::error(StatusCode::kNotFound,
+                           "board '%s': sensor.device '%s' is not a fakenect dump (no INDEX.txt)",
+                           board.name, board.sensor_device);
+    }
+    std::fclose(file);
+    setenv("FAKENECT_PATH", board.sensor_device, 1);
+    RGBDTAM_RETURN_IF_ERROR(
+        sensor->freenect.open(kFakenect, 0, FreenectDepth::kRaw, UINT32_MAX / 2));
     sensor->live = &sensor->freenect;
     return Status::ok();
   }

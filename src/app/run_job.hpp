@@ -37,6 +37,8 @@ struct RunOptions {
 Status load_board(const char* board_dir, Board* out);
 // The board with its overrides, validated, and its params file with theirs.
 Status load_board_and_params(const RunOptions& options, Board* board, Params* params);
+// Whether this build has the backend a sensor.kind names (RGBDTAM_HAL_BACKENDS lists them).
+bool sensor_backend_in_build(const char* kind);
 // The board's sensor, whichever backend its sensor.kind names (those this build has).
 struct BoardSensor {
   TumReplaySource replay;

@@ -7,13 +7,37 @@
 
 #include "rgbdtam/hal/clock.hpp"
 
+// The libfreenect calls the backend makes, as a table: the firmware can hold the USB driver and
+// fakenect (libfreenect's recording player, its symbols renamed fakenect_*) side by side.
+#define RGBDTAM_FREENECT_CALLS(X)                                                                 \
+  X(init)                                                                                         \
+  X(shutdown) X(select_subdevices) X(num_devices) X(open_device) X(close_device) X(set_user)      \
+      X(get_user) X(find_video_mode) X(find_depth_mode) X(set_video_mode) X(set_depth_mode)       \
+          X(set_depth_callback) X(set_video_callback) X(start_depth) X(start_video) X(stop_depth) \
+              X(stop_video) X(process_events_timeout)
+
+#if RGBDTAM_WITH_FAKENECT
+#define RGBDTAM_DECLARE_FAKENECT(call) extern "C" decltype(freenect_##call) fakenect_##call;
+RGBDTAM_FREENECT_CALLS(RGBDTAM_DECLARE_FAKENECT)
+#endif
+
 namespace rgbdtam {
+
+struct FreenectDriver {
+#define RGBDTAM_DRIVER_FIELD(call) decltype(&freenect_##call) call;
+  RGBDTAM_FREENECT_CALLS(RGBDTAM_DRIVER_FIELD)
+  freenect_depth_cb depth_callback;
+  freenect_video_cb video_callback;
+};
+
 namespace {
+template <const FreenectDriver& driver>
 void depth_callback(freenect_device* dev, void* data, uint32_t ticks) {
-  static_cast<FreenectSource*>(freenect_get_user(dev))->on_depth(data, ticks);
+  static_cast<FreenectSource*>(driver.get_user(dev))->on_depth(data, ticks);
 }
+template <const FreenectDriver& driver>
 void video_callback(freenect_device* dev, void* data, uint32_t ticks) {
-  static_cast<FreenectSource*>(freenect_get_user(dev))->on_video(data, ticks);
+  static_cast<FreenectSource*>(driver.get_user(dev))->on_video(data, ticks);
 }
 constexpr uint16_t kRawNoData = 2047;
 // A frame pair takes many USB transfers: the event loop turns until one is complete, for at
@@ -21,6 +45,17 @@ constexpr uint16_t kRawNoData = 2047;
 constexpr int64_t kFrameTimeoutNs = 1'000'000'000;
 constexpr int kEventWaitUs = 50'000;
 }  // namespace
+
+#define RGBDTAM_USB_CALL(call) freenect_##call,
+extern const FreenectDriver kFreenectUsb = {RGBDTAM_FREENECT_CALLS(RGBDTAM_USB_CALL)
+                                                depth_callback<kFreenectUsb>,
+                                            video_callback<kFreenectUsb>};
+#if RGBDTAM_WITH_FAKENECT
+#define RGBDTAM_FAKENECT_CALL(call) fakenect_##call,
+extern const FreenectDriver kFakenect = {RGBDTAM_FREENECT_CALLS(RGBDTAM_FAKENECT_CALL)
+                                             depth_callback<kFakenect>,
+                                         video_callback<kFakenect>};
+#endif
 
 uint16_t FreenectSource::raw_to_mm(uint16_t raw) {
   if (raw >= kRawNoData) return 0;
@@ -32,7 +67,9 @@ uint16_t FreenectSource::raw_to_mm(uint16_t raw) {
 
 FreenectSource::~FreenectSource() { close(); }
 
-Status FreenectSource::open(int device_index, FreenectDepth depth, uint32_t max_pair_ticks) {
+Status FreenectSource::open(const FreenectDriver& driver, int device_index, FreenectDepth depth,
+                            uint32_t max_pair_ticks) {
+  driver_ = &driver;
   depth_mode_ = depth;
   max_pair_ticks_ = max_pair_ticks;
   gray_.allocate(kWidth, kHeight);
@@ -45,35 +82,35 @@ Status FreenectSource::open(int device_index, FreenectDepth depth, uint32_t max_
 Status FreenectSource::open_stream() {
   const int device_index = device_index_;
   const FreenectDepth depth = depth_mode_;
-  if (freenect_init(&ctx_, nullptr) < 0) {
+  if (driver_->init(&ctx_, nullptr) < 0) {
     ctx_ = nullptr;
     return Status::error(StatusCode::kIoError, "libfreenect: cannot initialise (libusb)");
   }
-  freenect_select_subdevices(ctx_, FREENECT_DEVICE_CAMERA);
-  const int devices = freenect_num_devices(ctx_);
+  driver_->select_subdevices(ctx_, FREENECT_DEVICE_CAMERA);
+  const int devices = driver_->num_devices(ctx_);
   if (device_index < 0 || device_index >= devices) {
     return Status::error(StatusCode::kNotFound, "libfreenect: Kinect %d not found (%d attached)",
                          device_index, devices);
   }
-  if (freenect_open_device(ctx_, &dev_, device_index) < 0) {
+  if (driver_->open_device(ctx_, &dev_, device_index) < 0) {
     dev_ = nullptr;
     return Status::error(StatusCode::kIoError, "libfreenect: cannot open Kinect %d", device_index);
   }
-  freenect_set_user(dev_, this);
+  driver_->set_user(dev_, this);
   const freenect_frame_mode video =
-      freenect_find_video_mode(FREENECT_RESOLUTION_MEDIUM, FREENECT_VIDEO_RGB);
-  const freenect_frame_mode depth_mode = freenect_find_depth_mode(
+      driver_->find_video_mode(FREENECT_RESOLUTION_MEDIUM, FREENECT_VIDEO_RGB);
+  const freenect_frame_mode depth_mode = driver_->find_depth_mode(
       FREENECT_RESOLUTION_MEDIUM,
       depth == FreenectDepth::kRegistered ? FREENECT_DEPTH_REGISTERED : FREENECT_DEPTH_11BIT);
-  if (!video.is_valid || !depth_mode.is_valid || freenect_set_video_mode(dev_, video) < 0 ||
-      freenect_set_depth_mode(dev_, depth_mode) < 0) {
+  if (!video.is_valid || !depth_mode.is_valid || driver_->set_video_mode(dev_, video) < 0 ||
+      driver_->set_depth_mode(dev_, depth_mode) < 0) {
     return Status::error(StatusCode::kInvalidArgument,
                          "libfreenect: 640x480 RGB and %s depth modes refused",
                          depth == FreenectDepth::kRegistered ? "registered" : "11-bit");
   }
-  freenect_set_depth_callback(dev_, depth_callback);
-  freenect_set_video_callback(dev_, video_callback);
-  if (freenect_start_depth(dev_) < 0 || freenect_start_video(dev_) < 0) {
+  driver_->set_depth_callback(dev_, driver_->depth_callback);
+  driver_->set_video_callback(dev_, driver_->video_callback);
+  if (driver_->start_depth(dev_) < 0 || driver_->start_video(dev_) < 0) {
     return Status::error(StatusCode::kIoError, "libfreenect: cannot start the streams");
   }
   return Status::ok();
@@ -106,7 +143,7 @@ Status FreenectSource::next(SensorFrame* frame, Status* warning) {
   have_depth_ = have_video_ = false;
   for (const int64_t deadline = monotonic_ns() + kFrameTimeoutNs; monotonic_ns() < deadline;) {
     timeval wait{0, kEventWaitUs};  // libusb's own default would block for a minute
-    if (freenect_process_events_timeout(ctx_, &wait) < 0) {
+    if (driver_->process_events_timeout(ctx_, &wait) < 0) {
       return Status::error(StatusCode::kEndOfStream, "libfreenect: the stream ended");
     }
     if (!have_depth_ || !have_video_) continue;
@@ -137,13 +174,13 @@ Status FreenectSource::next(SensorFrame* frame, Status* warning) {
 
 void FreenectSource::close() {
   if (dev_ != nullptr) {
-    freenect_stop_depth(dev_);
-    freenect_stop_video(dev_);
-    freenect_close_device(dev_);
+    driver_->stop_depth(dev_);
+    driver_->stop_video(dev_);
+    driver_->close_device(dev_);
     dev_ = nullptr;
   }
   if (ctx_ != nullptr) {
-    freenect_shutdown(ctx_);
+    driver_->shutdown(ctx_);
     ctx_ = nullptr;
   }
 }

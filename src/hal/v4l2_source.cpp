@@ -206,7 +206,9 @@ void V4l2Stream::close() {
 }
 
 Status V4l2Source::open(V4l2Io* io, const char* depth_path, const char* colour_path, int width,
-                        int height, int64_t max_pair_dt_ns, int timeout_ms) {
+                        int height, int64_t max_pair_dt_ns, int timeout_ms, V4l2Colour colour) {
+  colour_format_ = colour;
+  if (colour == V4l2Colour::kMjpeg) RGBDTAM_RETURN_IF_ERROR(jpeg_.open(width, height));
   width_ = width;
   height_ = height;
   max_pair_dt_ns_ = max_pair_dt_ns;
@@ -221,7 +223,9 @@ Status V4l2Source::open(V4l2Io* io, const char* depth_path, const char* colour_p
 
 Status V4l2Source::open_stream() {
   RGBDTAM_RETURN_IF_ERROR(depth_.open(io_, depth_path_, V4L2_PIX_FMT_Z16, width_, height_));
-  return colour_.open(io_, colour_path_, V4L2_PIX_FMT_YUYV, width_, height_);
+  return colour_.open(io_, colour_path_,
+                      colour_format_ == V4l2Colour::kMjpeg ? V4L2_PIX_FMT_MJPEG : V4L2_PIX_FMT_YUYV,
+                      width_, height_);
 }
 
 Status V4l2Source::next(SensorFrame* frame, Status* warning) {
@@ -244,15 +248,20 @@ Status V4l2Source::next(SensorFrame* frame, Status* warning) {
       if (s.is_ok()) s = colour_.take(timeout_ms_, &c, &tc, &counters_);
     }
   }
-  if (s.is_ok() && (depth_.bytes_used(d) < pixels * 2 || colour_.bytes_used(c) < pixels * 2)) {
+  const bool mjpeg = colour_format_ == V4l2Colour::kMjpeg;
+  if (s.is_ok() &&
+      (depth_.bytes_used(d) < pixels * 2 || (!mjpeg && colour_.bytes_used(c) < pixels * 2))) {
     s = Status::error(StatusCode::kCorrupt, "short frame (%zu depth, %zu colour bytes)",
                       depth_.bytes_used(d), colour_.bytes_used(c));
   }
+  if (s.is_ok() && mjpeg) s = jpeg_.decode(colour_.data(c), colour_.bytes_used(c), gray_.data());
   if (s.is_ok()) {
     std::memcpy(depth_img_.data(), depth_.data(d), pixels * 2);
-    const uint8_t* yuyv = colour_.data(c);
-    uint8_t* gray = gray_.data();
-    for (size_t i = 0; i < pixels; ++i) gray[i] = yuyv[2 * i];  // Y of Y0 U Y1 V
+    if (!mjpeg) {
+      const uint8_t* yuyv = colour_.data(c);
+      uint8_t* gray = gray_.data();
+      for (size_t i = 0; i < pixels; ++i) gray[i] = yuyv[2 * i];  // Y of Y0 U Y1 V
+    }
   }
   // Buffers go back to the driver whatever happened.
   if (d >= 0) {

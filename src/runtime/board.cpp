@@ -43,10 +43,13 @@ const KeySpec kSpecs[] = {
     RGBDTAM_TEXT("build.preset", "the CMake preset that builds for it", preset, true),
     {"board.cpu_count", ValueType::kInt, 1, 256, "", "CPU cores thread placement may name",
      RGBDTAM_FIELD(cpu_count), true},
-    RGBDTAM_TEXT("sensor.kind", "replay, openni2, freenect or v4l2", sensor_kind, true),
-    RGBDTAM_TEXT("sensor.device", "replay: TUM folder; else device path or URI", sensor_device,
-                 true),
+    RGBDTAM_TEXT("sensor.kind", "replay, openni2, freenect, fakenect or v4l2", sensor_kind, true),
+    RGBDTAM_TEXT("sensor.device",
+                 "replay: TUM folder; fakenect: libfreenect dump folder; else device path or URI",
+                 sensor_device, true),
     RGBDTAM_TEXT("sensor.config", "camera and tracking params file", sensor_config, true),
+    RGBDTAM_TEXT("sensor.colour", "v4l2: the colour node's format, yuyv or mjpeg", sensor_colour,
+                 false),
     RGBDTAM_TEXT("sensor.depth", "freenect: registered (mm, device calibration) or raw",
                  sensor_depth, false),
     RGBDTAM_TEXT("sensor.usb_id", "vendor:product (hex) that must be attached, e.g. 045e:02ae",
@@ -133,6 +136,10 @@ bool resolve(char* path, const char* dir) {
 }
 }  // namespace
 
+bool sensor_device_is_a_folder(const Board& b) {
+  return std::strcmp(b.sensor_kind, "replay") == 0 || std::strcmp(b.sensor_kind, "fakenect") == 0;
+}
+
 Status parse_board(const char* text, const char* source, const char* board_dir, Board* out) {
   Board b;
   RGBDTAM_RETURN_IF_ERROR(parse_key_values(text, source, kTable, &b));
@@ -140,8 +147,8 @@ Status parse_board(const char* text, const char* source, const char* board_dir, 
     return Status::error(StatusCode::kInvalidArgument, "%s: folder path too long", source);
   }
   // A replay folder, params file or device path written relative to the board folder.
-  const bool replay = std::strcmp(b.sensor_kind, "replay") == 0;
-  if (!resolve(b.sensor_config, board_dir) || (replay && !resolve(b.sensor_device, board_dir))) {
+  if (!resolve(b.sensor_config, board_dir) ||
+      (sensor_device_is_a_folder(b) && !resolve(b.sensor_device, board_dir))) {
     return Status::error(StatusCode::kInvalidArgument, "%s: a resolved path is too long", source);
   }
   *out = b;
@@ -157,9 +164,9 @@ Status set_board_value(const char* assignment, Board* out) {
     const size_t n = std::strlen(name);
     return std::strncmp(key, name, n) == 0 && (key[n] == '=' || key[n] == ' ' || key[n] == '\t');
   };
-  const bool replay = std::strcmp(out->sensor_kind, "replay") == 0;
   if ((is("sensor.config") && !resolve(out->sensor_config, out->directory)) ||
-      (is("sensor.device") && replay && !resolve(out->sensor_device, out->directory))) {
+      (is("sensor.device") && sensor_device_is_a_folder(*out) &&
+       !resolve(out->sensor_device, out->directory))) {
     return Status::error(StatusCode::kInvalidArgument, "--board-set %s: resolved path too long",
                          assignment);
   }
@@ -179,11 +186,12 @@ bool split_endpoint(const char* endpoint, char* ip, int ip_size, uint16_t* port)
 }
 
 Status validate_board(const Board& b) {
-  static const char* const kSensors[] = {"replay", "openni2", "freenect", "v4l2"};
+  static const char* const kSensors[] = {"replay", "openni2", "freenect", "fakenect", "v4l2"};
   static const char* const kLinks[] = {"udp", "serial"};
-  if (!one_of(b.sensor_kind, kSensors, 4)) {
+  if (!one_of(b.sensor_kind, kSensors, 5)) {
     return Status::error(StatusCode::kInvalidArgument,
-                         "board '%s': sensor.kind '%s' is not replay, openni2, freenect or v4l2",
+                         "board '%s': sensor.kind '%s' is not replay, openni2, freenect, fakenect "
+                         "or v4l2",
                          b.name, b.sensor_kind);
   }
   unsigned vendor = 0, product = 0;
@@ -194,6 +202,12 @@ Status validate_board(const Board& b) {
     return Status::error(StatusCode::kInvalidArgument,
                          "board '%s': sensor.usb_id '%s' is not vendor:product in hex", b.name,
                          b.sensor_usb_id);
+  }
+  static const char* const kColours[] = {"yuyv", "mjpeg"};
+  if (!one_of(b.sensor_colour, kColours, 2)) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "board '%s': sensor.colour '%s' is not yuyv or mjpeg", b.name,
+                         b.sensor_colour);
   }
   static const char* const kDepthModes[] = {"registered", "raw"};
   if (!one_of(b.sensor_depth, kDepthModes, 2)) {

@@ -152,6 +152,14 @@ void PoseLink::on_frame(const mavlink::Frame& f, int64_t now_ns) {
   if (f.message_id == mavlink::kHeartbeat.id) {
     mavlink::Heartbeat hb;
     mavlink::unpack(f.payload, f.length, &hb);
+    // The operator learns when the autopilot appears and when it comes back.
+    if (!peer_.heard || peer_.silent) {
+      char text[mavlink::kMaxStatusTextChars + 1];
+      std::snprintf(text, sizeof(text),
+                    "autopilot: heard, system %u component %u, MAV_AUTOPILOT %u", f.system_id,
+                    f.component_id, hb.autopilot);
+      on_status(mavlink::kMavSeverityInfo, text, now_ns);
+    }
     peer_.heard = true;
     peer_.silent = false;
     peer_.system_id = f.system_id;
@@ -200,6 +208,7 @@ void PoseLink::listen(int64_t now_ns) {
   if (peer_.heard && !peer_.silent && now_ns - peer_.last_heartbeat_ns > kPeerSilentNs) {
     peer_.silent = true;
     ++peer_.silences;
+    on_status(mavlink::kMavSeverityWarning, "autopilot: silent (no HEARTBEAT for 3 s)", now_ns);
   }
 }
 

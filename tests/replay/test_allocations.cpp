@@ -8,6 +8,7 @@
 #include <memory>
 #include <new>
 
+#include "clip_camera.hpp"
 #include "config_files.hpp"
 #include "fake_v4l2.hpp"
 #include "record_job.hpp"
@@ -18,6 +19,7 @@
 #include "run_job.hpp"
 #include "stress_variants.hpp"
 #include "test_paths.hpp"
+#include "tum_writer.hpp"
 
 #include "allocation_counting.hpp"
 
@@ -219,6 +221,39 @@ TEST(Allocations, NoneWhileAV4l2SensorDeliversSkipsAndTimesOut) {
   EXPECT_EQ(g_calls.load(), 0) << g_bytes.load() << " bytes allocated while streaming";
   std::printf("v4l2 + recovery: %d frames, %d errors, %u dropped, %ld allocations\n", frames,
               errors, source.dropped(), g_calls.load());
+}
+
+// A UVC camera sending MJPEG at full resolution: libjpeg decodes every frame from the arena
+// JpegDecoder sized at open, never from the heap.
+TEST(Allocations, NoneWhileDecodingMjpegColourFrames) {
+  std::vector<std::vector<uint8_t>> gray;
+  std::vector<std::vector<uint16_t>> depth;
+  ASSERT_TRUE(
+      testing::ClipCamera::load(testing::source_path("data/tum_fr1_xyz_clip"), &gray, &depth));
+  std::vector<std::vector<uint8_t>> jpeg;
+  for (const auto& g : gray) jpeg.push_back(testing::encode_jpeg(g.data(), 640, 480, 90));
+  testing::ClipCamera camera(gray, depth, 640, 480, 30.0, {});
+  camera.send_mjpeg(jpeg);
+  V4l2Source source;
+  ASSERT_TRUE(source
+                  .open(&camera, "/dev/soak-depth", "/dev/soak-colour", 640, 480, 20'000'000, 1000,
+                        V4l2Colour::kMjpeg)
+                  .is_ok());
+  SensorFrame f;
+  Status warning;
+  ASSERT_TRUE(source.next(&f, &warning).is_ok());  // the first frame: libjpeg's tables
+  g_calls = 0;
+  g_bytes = 0;
+  g_armed = true;
+  int frames = 0;
+  for (int i = 0; i < 20; ++i) frames += source.next(&f, &warning).is_ok();
+  g_armed = false;
+  EXPECT_EQ(frames, 20);
+  EXPECT_EQ(source.jpeg().decoded(), 21u);
+  EXPECT_EQ(g_calls.load(), 0) << g_bytes.load() << " bytes allocated while decoding";
+  std::printf("MJPEG: %u frames decoded, %ld allocations; libjpeg's arena peak %zu kB of %zu kB\n",
+              source.jpeg().decoded(), g_calls.load(), source.jpeg().arena().peak_bytes() / 1024,
+              source.jpeg().arena().capacity_bytes() / 1024);
 }
 }  // namespace
 }  // namespace rgbdtam

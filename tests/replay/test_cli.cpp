@@ -63,6 +63,35 @@ TEST(Cli, TheMemoryBudgetChecksTheBoardsOwnPoolSize) {
   EXPECT_NE(o.err.find("map.keyframe_pool 24 x"), std::string::npos) << o.err;
 }
 
+TEST(Cli, EvalPlotsTheTrajectoryAsSvgAndNamesAPlotItCannotWrite) {
+  const std::string dir = testing::make_temp_dir("cli_plot");
+  const std::string gt = clip() + "/groundtruth.txt";
+  // The ground truth against itself: every pose compared, none lost or false-valid.
+  Outcome o = rgbdtam("eval " + gt + " " + gt + " --frames " + clip() + "/rgb.txt --plot " + dir +
+                      "/plot.svg");
+  EXPECT_EQ(o.exit_code, 0) << o.err;
+  const std::string svg = read_all(dir + "/plot.svg");
+  EXPECT_EQ(svg.rfind("<svg", 0), 0u);
+  EXPECT_NE(svg.find("<g id=\"top-view\">"), std::string::npos);
+  EXPECT_NE(svg.find("<g id=\"error-over-time\">"), std::string::npos);
+  EXPECT_NE(svg.find("</svg>"), std::string::npos);
+  EXPECT_FALSE(exists(dir + "/plot.svg.partial"));
+  o = rgbdtam("eval " + gt + " " + gt + " --plot " + dir + "/missing/plot.svg");
+  EXPECT_EQ(o.exit_code, 1);
+  EXPECT_NE(o.err.find("--plot"), std::string::npos) << o.err;
+}
+
+#if RGBDTAM_WITH_FAKENECT
+TEST(Cli, AFakenectFolderWithoutADumpIsAClearError) {
+  // fakenect itself would end the process; the firmware checks the folder first.
+  const Outcome o = rgbdtam("run --board " + testing::source_path("board/raspberry-pi-4") +
+                            " --board-set sensor.kind=fakenect --board-set sensor.usb_id=" +
+                            " --board-set sensor.device=" + clip() + " --max-frames 1 --quiet");
+  EXPECT_EQ(o.exit_code, 1);
+  EXPECT_NE(o.err.find("is not a fakenect dump (no INDEX.txt)"), std::string::npos) << o.err;
+}
+#endif
+
 TEST(Cli, ABadFrameCountIsAUsageError) {
   const Outcome o = rgbdtam("replay " + clip() + " --config " + config() + " --max-frames abc");
   EXPECT_EQ(o.exit_code, 2);

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "evaluate_command.hpp"
+#include "firmware_monitor.hpp"
 #include "replay_runner.hpp"
 #include "rgbdtam/hal/tum_trajectory.hpp"
 #include "rgbdtam/hal/udp_link.hpp"
@@ -29,61 +30,10 @@
 namespace rgbdtam {
 namespace {
 
-struct Monitor {
-  UdpLink udp;
-  mavlink::Decoder decoder;
-  std::vector<StampedPose> poses;
-  int odometry = 0, lost = 0, heartbeats = 0;
-  std::vector<std::string> texts;
-  mavlink::StatusTextJoiner joiner;
-  void drain(const SE3& T_b_c) {
-    uint8_t buf[2048];
-    for (size_t n; (n = udp.receive(buf, sizeof(buf))) > 0;) {
-      decoder.feed_all(buf, n, [&](const mavlink::Frame& f) {
-        if (f.message_id == mavlink::kOdometry.id) {
-          mavlink::Odometry o;
-          mavlink::unpack(f.payload, f.length, &o);
-          ++odometry;
-          if (o.quality < 0) {
-            ++lost;
-          } else {
-            poses.push_back({o.time_usec * 1e-6, camera_pose_of(o, T_b_c)});
-          }
-        } else if (f.message_id == mavlink::kHeartbeat.id) {
-          ++heartbeats;
-        } else if (f.message_id == mavlink::kStatusText.id) {
-          mavlink::StatusText t;
-          mavlink::unpack(f.payload, f.length, &t);
-          if (const char* whole = joiner.add(t)) texts.emplace_back(whole);
-        }
-      });
-    }
-  }
-};
-
-// Runs the host-emulation board with its link pointed at the monitor.
-void run_board(Monitor* monitor, RunJob* job, std::vector<std::string> overrides) {
-  ASSERT_TRUE(monitor->udp.open(nullptr, 0, 0).is_ok());
-  overrides.push_back("link.udp_remote=127.0.0.1:" + std::to_string(monitor->udp.local_port()));
-  static std::vector<std::string> keep;  // the options point into these
-  keep = overrides;
-  static const std::string board = testing::source_path("board/host-emulation");
-  RunOptions options;
-  options.board_dir = board.c_str();
-  for (const std::string& o : keep)
-    options.board_overrides[options.board_override_count++] = o.c_str();
-  options.progress = false;
-  ASSERT_TRUE(job->init(options).is_ok());
-  ASSERT_TRUE(job->start().is_ok());
-  while (job->step()) monitor->drain(job->board().T_b_c);
-  job->finish();
-  monitor->drain(job->board().T_b_c);
-}
-
 TEST(Firmware, HostEmulationStreamsEveryPoseAndMatchesReplay) {
-  Monitor monitor;
+  testing::Monitor monitor;
   RunJob job;
-  run_board(&monitor, &job, {});
+  testing::run_board(&monitor, &job, {});
   const FirmwareCounters& c = job.runtime().counters();
   EXPECT_EQ(c.frames + job.sensor_dropped(), 50u);
   EXPECT_EQ(monitor.odometry, static_cast<int>(c.frames));
@@ -136,9 +86,10 @@ TEST(Firmware, SensorErrorsReachTheOperatorAsStatusTextAndAFaultBlink) {
     ++entry;
   }
   ASSERT_TRUE(testing::write_text(dir + "/" + path, "\x89PNG\r\n"));
-  Monitor monitor;
+  testing::Monitor monitor;
   RunJob job;
-  run_board(&monitor, &job, {"sensor.device=" + dir, "sensor.config=" + dir + "/camera.conf"});
+  testing::run_board(&monitor, &job,
+                     {"sensor.device=" + dir, "sensor.config=" + dir + "/camera.conf"});
   const FirmwareCounters& c = job.runtime().counters();
   EXPECT_EQ(c.sensor_errors, 1u);
   bool reported = false;
@@ -176,10 +127,11 @@ TEST(Firmware, ASilentSensorIsReportedAsAStallAndItsReturnAsARecovery) {
   // The sensor goes silent for 2.6 s after frame 5.
   delay_entries(dir + "/rgb.txt", 6, 2.5);
   delay_entries(dir + "/depth.txt", 6, 2.5);
-  Monitor monitor;
+  testing::Monitor monitor;
   RunJob job;
-  run_board(&monitor, &job,
-            {"sensor.device=" + dir, "sensor.config=" + dir + "/camera.conf", "sensor.fps=10"});
+  testing::run_board(
+      &monitor, &job,
+      {"sensor.device=" + dir, "sensor.config=" + dir + "/camera.conf", "sensor.fps=10"});
   const FirmwareCounters& c = job.runtime().counters();
   EXPECT_EQ(c.frames + job.sensor_dropped(), 12u) << "nothing lost to the stall";
   EXPECT_EQ(c.sensor_recoveries, 1u);
@@ -214,7 +166,7 @@ TEST(Firmware, StoppingDuringARecordedGapOfAYearTakesNoLongerThanAFrame) {
   ASSERT_TRUE(testing::write_text(dir + "/camera.conf", testing::synthetic_config(scene)));
   delay_entries(dir + "/rgb.txt", 6, 365.0 * 86400);
   delay_entries(dir + "/depth.txt", 6, 365.0 * 86400);
-  Monitor monitor;
+  testing::Monitor monitor;
   RunJob job;
   using Clock = std::chrono::steady_clock;
   std::atomic<int64_t> stop_requested_ns{0};
@@ -223,8 +175,9 @@ TEST(Firmware, StoppingDuringARecordedGapOfAYearTakesNoLongerThanAFrame) {
     stop_requested_ns = Clock::now().time_since_epoch().count();
     job.request_stop();
   });
-  run_board(&monitor, &job,
-            {"sensor.device=" + dir, "sensor.config=" + dir + "/camera.conf", "sensor.fps=10"});
+  testing::run_board(
+      &monitor, &job,
+      {"sensor.device=" + dir, "sensor.config=" + dir + "/camera.conf", "sensor.fps=10"});
   const int64_t finished_ns = Clock::now().time_since_epoch().count();
   ctrl_c.join();
   const double stop_s = (finished_ns - stop_requested_ns.load()) * 1e-9;
@@ -336,7 +289,7 @@ TEST(Firmware, HostEmulationOverASerialPortAt115200CarriesEveryPose) {
   char name[128];
   ASSERT_EQ(::openpty(&master, &slave, name, nullptr, nullptr), 0);
   std::atomic<bool> done{false};
-  Monitor monitor;
+  testing::Monitor monitor;
   std::vector<uint8_t> bytes;
   std::thread reader([&] {
     uint8_t buf[4096];

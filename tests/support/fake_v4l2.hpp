@@ -51,7 +51,9 @@ class FakeV4l2 : public V4l2Io {
     bool open = false;
     bool wedged = false;  // delivers nothing until opened again
     int opens = 0;
+    std::vector<std::vector<uint8_t>> jpeg;  // MJPEG: a frame's fill picks one of these
   };
+  static constexpr size_t kMjpegBufferBytes = 1 << 16;
   std::vector<Node> nodes;
   bool unplugged = false;
   // Simulated time: a scripted frame is visible once now_ns reaches its timestamp; waiting in
@@ -59,8 +61,11 @@ class FakeV4l2 : public V4l2Io {
   int64_t now_ns = 0;
 
   Node& add(const std::string& path, uint32_t fourcc) {
-    nodes.push_back({path, fourcc, {}, {}, {}, false, false, 0});
+    nodes.push_back({path, fourcc, {}, {}, {}, false, false, 0, {}});
     return nodes.back();
+  }
+  static size_t buffer_bytes(const Node& n) {
+    return n.fourcc == V4L2_PIX_FMT_MJPEG ? kMjpegBufferBytes : kW * kH * 2;
   }
   Node* node(int fd) {
     return fd >= 3 && fd - 3 < static_cast<int>(nodes.size()) ? &nodes[fd - 3] : nullptr;
@@ -107,12 +112,12 @@ class FakeV4l2 : public V4l2Io {
         auto* r = static_cast<v4l2_requestbuffers*>(arg);
         r->count = 3;
         n->queued.clear();
-        n->buffers.assign(3, std::vector<uint8_t>(kW * kH * 2, 0));
+        n->buffers.assign(3, std::vector<uint8_t>(buffer_bytes(*n), 0));
         return 0;
       }
       case VIDIOC_QUERYBUF: {
         auto* b = static_cast<v4l2_buffer*>(arg);
-        b->length = kW * kH * 2;
+        b->length = static_cast<uint32_t>(buffer_bytes(*n));
         b->m.offset = b->index * 4096;
         return 0;
       }
@@ -138,7 +143,12 @@ class FakeV4l2 : public V4l2Io {
         b->index = static_cast<uint32_t>(n->queued.front());
         n->queued.pop_front();
         std::vector<uint8_t>& mem = n->buffers[b->index];
-        if (n->fourcc == V4L2_PIX_FMT_Z16) {
+        b->bytesused = kW * kH * 2;
+        if (n->fourcc == V4L2_PIX_FMT_MJPEG) {
+          const std::vector<uint8_t>& jpeg = n->jpeg[e.fill % n->jpeg.size()];
+          std::memcpy(mem.data(), jpeg.data(), jpeg.size());
+          b->bytesused = static_cast<uint32_t>(jpeg.size());
+        } else if (n->fourcc == V4L2_PIX_FMT_Z16) {
           for (int i = 0; i < kW * kH; ++i) {
             const uint16_t v = static_cast<uint16_t>(e.fill * 100 + i);
             std::memcpy(&mem[2 * i], &v, 2);
@@ -149,7 +159,6 @@ class FakeV4l2 : public V4l2Io {
             mem[2 * i + 1] = 128;                               // U or V
           }
         }
-        b->bytesused = kW * kH * 2;
         b->flags = e.kind == Event::kErrorFlag ? V4L2_BUF_FLAG_ERROR : 0;
         b->timestamp.tv_sec = e.t_ns / 1000000000;
         b->timestamp.tv_usec = (e.t_ns % 1000000000) / 1000;

@@ -8,7 +8,9 @@
 namespace rgbdtam::testing {
 
 std::string source_path(const std::string& relative) {
-  return std::string(RGBDTAM_SOURCE_DIR) + "/" + relative;
+  // On a board (tools/hil/run.py) the source tree's data is copied elsewhere.
+  const char* env = std::getenv("RGBDTAM_SOURCE_DIR");
+  return std::string(env != nullptr ? env : RGBDTAM_SOURCE_DIR) + "/" + relative;
 }
 
 namespace {

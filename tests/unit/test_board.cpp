@@ -2,11 +2,17 @@
 // name the board, the file, the line and the key.
 #include <gtest/gtest.h>
 
+#include <dirent.h>
+
+#include <fstream>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "config_text.hpp"
 #include "rgbdtam/hal/file.hpp"
 #include "rgbdtam/runtime/board.hpp"
+#include "run_job.hpp"
 #include "test_paths.hpp"
 
 namespace rgbdtam {
@@ -39,6 +45,61 @@ TEST(Board, ShippedBoardsLoadAndValidate) {
     delete[] text;
     EXPECT_TRUE(apply_board_capacity(b, &p).is_ok());
   }
+}
+
+std::vector<std::string> shipped_boards() {
+  std::vector<std::string> names;
+  DIR* dir = opendir(testing::source_path("board").c_str());
+  if (dir == nullptr) return names;
+  while (const dirent* entry = readdir(dir)) {
+    const std::string name = entry->d_name;
+    std::ifstream conf(testing::source_path("board/" + name + "/board.conf"));
+    if (name != "." && name != ".." && conf) names.push_back(name);
+  }
+  closedir(dir);
+  return names;
+}
+
+// Each board's build.preset is a preset that names the board (RGBDTAM_BOARD), so that the
+// board's own build runs BoardBuild.TheBoardsSensorIsInThisBuild (tools/test.sh builds each).
+TEST(Board, EveryBoardIsBuiltByAPresetThatNamesIt) {
+  std::ifstream file(testing::source_path("CMakePresets.json"));
+  std::stringstream presets;
+  presets << file.rdbuf();
+  const std::string json = presets.str();
+  const std::vector<std::string> boards = shipped_boards();
+  EXPECT_GE(boards.size(), 3u);
+  for (const std::string& name : boards) {
+    Board b;
+    ASSERT_TRUE(load(testing::source_path("board/" + name), &b).is_ok()) << name;
+    const size_t begin = json.find("\"name\": \"" + std::string(b.preset) + "\"");
+    ASSERT_NE(begin, std::string::npos) << name << ": no preset " << b.preset;
+    const size_t end = json.find("\"name\":", begin + 1);
+    const std::string preset = json.substr(begin, end - begin);
+    EXPECT_NE(preset.find("\"RGBDTAM_BOARD\": \"${sourceDir}/board/" + name + "\""),
+              std::string::npos)
+        << name << ": preset " << b.preset << " does not build for this board";
+  }
+}
+
+#ifdef RGBDTAM_BUILD_BOARD
+TEST(BoardBuild, TheBoardsSensorIsInThisBuild) {
+  Board b;
+  ASSERT_TRUE(load(RGBDTAM_BUILD_BOARD, &b).is_ok());
+  EXPECT_TRUE(sensor_backend_in_build(b.sensor_kind))
+      << "board " << b.name << " needs " << b.sensor_kind << "; this build has "
+      << RGBDTAM_HAL_BACKENDS;
+  std::printf("board %s: sensor %s; backends in this build: %s\n", b.name, b.sensor_kind,
+              RGBDTAM_HAL_BACKENDS);
+}
+#endif
+
+TEST(Board, BackendsInThisBuildAreFoundByName) {
+  EXPECT_TRUE(sensor_backend_in_build("replay"));
+  EXPECT_TRUE(sensor_backend_in_build("v4l2"));
+  EXPECT_FALSE(sensor_backend_in_build("repl"));
+  EXPECT_FALSE(sensor_backend_in_build(""));
+  EXPECT_FALSE(sensor_backend_in_build("kinect"));
 }
 
 TEST(Board, HostEmulationPathsAreRelativeToTheBoardFolder) {

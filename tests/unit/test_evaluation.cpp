@@ -3,8 +3,11 @@
 
 #include <cmath>
 #include <random>
+#include <sstream>
+#include <string>
 
 #include "rgbdtam/core/evaluation.hpp"
+#include "trajectory_plot.hpp"
 
 namespace rgbdtam {
 namespace {
@@ -175,6 +178,71 @@ TEST(Nees, AveragesSixWhenTheCovarianceIsTrueAndScalesWithIt) {
   EXPECT_NEAR(consistent.mean_translation, 3.0, 0.4);
   for (auto& c : cov) c *= 4.0;  // four times too cautious: a quarter of the NEES
   EXPECT_NEAR(evaluate_frame_to_frame_nees(gt, est, cov).mean, 1.5, 0.15);
+}
+
+}  // namespace
+}  // namespace rgbdtam
+
+namespace rgbdtam {
+namespace {
+
+// A circle in a tilted plane; the estimate loses frames 40-59 and jumps 30 cm at frame 80.
+TEST(TrajectoryPlot, MarksLostStretchesAndFalseValidPosesOnThePrincipalPlane) {
+  std::vector<StampedPose> gt, est;
+  std::vector<double> frames;
+  const Eigen::Quaterniond tilt(Eigen::AngleAxisd(0.7, Vector3d(1, 1, 0).normalized()));
+  for (int i = 0; i < 120; ++i) {
+    const double t = 10 + i / 30.0, a = i * 0.05;
+    frames.push_back(t);
+    const SE3 pose(Eigen::Quaterniond::Identity(), tilt * Vector3d(std::cos(a), std::sin(a), 0));
+    gt.push_back({t, pose});
+    if (i >= 40 && i < 60) continue;
+    const Vector3d jump = i == 80 ? Vector3d(0.3, 0, 0) : Vector3d::Zero();
+    est.push_back({t, SE3(pose.quaternion(), pose.translation() + jump)});
+  }
+  const EvaluationReport report = evaluate_all(gt, est, &frames);
+  ASSERT_TRUE(report.ate_ok);
+  EXPECT_GE(report.false_valid.count, 1);
+  EXPECT_EQ(report.false_valid.stamps_s.size(), static_cast<size_t>(report.false_valid.count));
+  PlotInput in;
+  in.gt = &gt;
+  in.est = &est;
+  in.frame_stamps = &frames;
+  in.report = &report;
+  in.title = "circle <test> & tilt";
+  const std::vector<LostStretch> lost = lost_stretches(in);
+  ASSERT_EQ(lost.size(), 1u);
+  EXPECT_DOUBLE_EQ(lost[0].begin_s, frames[40]);
+  EXPECT_DOUBLE_EQ(lost[0].end_s, frames[59]);
+  // Without the frame list, the gap in the estimate is found by its length.
+  in.frame_stamps = nullptr;
+  ASSERT_EQ(lost_stretches(in).size(), 1u);
+  in.frame_stamps = &frames;
+
+  const std::string svg = trajectory_svg(in);
+  EXPECT_EQ(svg.rfind("<svg", 0), 0u);
+  EXPECT_NE(svg.find("</svg>\n"), std::string::npos);
+  EXPECT_NE(svg.find("circle &lt;test&gt; &amp; tilt"), std::string::npos) << "title escaped";
+  auto count = [&](const std::string& what) {
+    int n = 0;
+    for (size_t at = svg.find(what); at != std::string::npos; at = svg.find(what, at + 1)) ++n;
+    return n;
+  };
+  EXPECT_EQ(count("class=\"lost\""), 1);
+  // Each false-valid pose in both views.
+  EXPECT_EQ(count("class=\"false-valid\""), 2 * report.false_valid.count);
+  // The tilted circle seen on its own plane is round: the top view's extent is as wide as high.
+  const size_t view = svg.find("<g id=\"top-view\">");
+  const size_t line = svg.find("<polyline", view);
+  const size_t points = svg.find("points=\"", line) + 8;
+  std::istringstream in_points(svg.substr(points, svg.find('"', points) - points));
+  double lo_x = 1e9, hi_x = -1e9, lo_y = 1e9, hi_y = -1e9;
+  for (std::string xy; in_points >> xy;) {
+    const double x = std::stod(xy), y = std::stod(xy.substr(xy.find(',') + 1));
+    lo_x = std::min(lo_x, x), hi_x = std::max(hi_x, x);
+    lo_y = std::min(lo_y, y), hi_y = std::max(hi_y, y);
+  }
+  EXPECT_NEAR(hi_x - lo_x, hi_y - lo_y, 0.05 * (hi_x - lo_x));
 }
 
 }  // namespace

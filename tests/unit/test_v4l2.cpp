@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 #include <linux/videodev2.h>
 
+#include <algorithm>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -12,6 +14,7 @@
 #include "rgbdtam/hal/sensor_recovery.hpp"
 #include "rgbdtam/hal/v4l2_source.hpp"
 #include "test_paths.hpp"
+#include "tum_writer.hpp"
 
 namespace rgbdtam {
 namespace {
@@ -28,14 +31,85 @@ struct Rig {
   FakeV4l2::Node* depth;
   FakeV4l2::Node* colour;
   V4l2Source source;
-  Rig(uint32_t depth_fourcc = V4L2_PIX_FMT_Z16) {
+  V4l2Colour colour_format;
+  explicit Rig(uint32_t depth_fourcc = V4L2_PIX_FMT_Z16, V4l2Colour colour_as = V4l2Colour::kYuyv)
+      : colour_format(colour_as) {
     io.nodes.reserve(2);
     depth = &io.add("/dev/video0", depth_fourcc);
-    colour = &io.add("/dev/video1", V4L2_PIX_FMT_YUYV);
+    colour = &io.add("/dev/video1",
+                     colour_as == V4l2Colour::kMjpeg ? V4L2_PIX_FMT_MJPEG : V4L2_PIX_FMT_YUYV);
     io.now_ns = 900 * kMs;  // the scripts start about a second in
   }
-  Status open() { return source.open(&io, "/dev/video0", "/dev/video1", kW, kH, 10 * kMs, 500); }
+  Status open() {
+    return source.open(&io, "/dev/video0", "/dev/video1", kW, kH, 10 * kMs, 500, colour_format);
+  }
 };
+
+// A kW x kH grey pattern: a ramp, brighter with `level`.
+std::vector<uint8_t> pattern(int level) {
+  std::vector<uint8_t> g(kW * kH);
+  for (int i = 0; i < kW * kH; ++i) g[i] = static_cast<uint8_t>(40 + 10 * level + 8 * (i % kW));
+  return g;
+}
+
+TEST(V4l2Mjpeg, ColourFramesAreDecodedToTheirLuma) {
+  Rig rig(V4L2_PIX_FMT_Z16, V4l2Colour::kMjpeg);
+  for (int level = 0; level < 3; ++level) {
+    rig.colour->jpeg.push_back(testing::encode_jpeg(pattern(level).data(), kW, kH, 95));
+  }
+  ASSERT_TRUE(rig.open().is_ok());
+  for (int i = 0; i < 3; ++i) {
+    rig.depth->script.push_back(frame(1000 + 33 * i, static_cast<uint8_t>(i)));
+    rig.colour->script.push_back(frame(1001 + 33 * i, static_cast<uint8_t>(i)));
+  }
+  size_t arena_top = 0;
+  for (int i = 0; i < 3; ++i) {
+    SensorFrame f;
+    Status warning;
+    const Status s = rig.source.next(&f, &warning);
+    ASSERT_TRUE(s.is_ok()) << s.message();
+    const std::vector<uint8_t> want = pattern(i);
+    int worst = 0;
+    for (int p = 0; p < kW * kH; ++p) worst = std::max(worst, std::abs(f.gray[p] - want[p]));
+    EXPECT_LE(worst, 3) << "frame " << i << ": JPEG at quality 95";
+    EXPECT_EQ(f.depth[5], i * 100 + 5);
+    // Every frame leaves libjpeg's arena where the one before left it.
+    if (i == 1) {
+      arena_top = rig.source.jpeg().arena().used_bytes();
+    } else if (i == 2) {
+      EXPECT_EQ(rig.source.jpeg().arena().used_bytes(), arena_top);
+    }
+  }
+  EXPECT_EQ(rig.source.jpeg().decoded(), 3u);
+}
+
+TEST(V4l2Mjpeg, ACorruptTruncatedOrMissizedJpegIsAnErrorAndTheNextFrameDecodes) {
+  Rig rig(V4L2_PIX_FMT_Z16, V4l2Colour::kMjpeg);
+  const std::vector<uint8_t> good = testing::encode_jpeg(pattern(0).data(), kW, kH, 90);
+  std::vector<uint8_t> truncated(good.begin(), good.begin() + good.size() / 2);
+  std::vector<uint8_t> garbage(good.size());
+  for (size_t i = 0; i < garbage.size(); ++i) garbage[i] = static_cast<uint8_t>(i * 37);
+  std::vector<uint8_t> wide(2 * kW * kH, 90);
+  rig.colour->jpeg = {good, truncated, garbage, testing::encode_jpeg(wide.data(), 2 * kW, kH, 90)};
+  ASSERT_TRUE(rig.open().is_ok());
+  for (int i = 0; i < 5; ++i) {
+    rig.depth->script.push_back(frame(1000 + 33 * i, 0));
+    rig.colour->script.push_back(frame(1001 + 33 * i, static_cast<uint8_t>(i % 4)));
+  }
+  SensorFrame f;
+  Status warning;
+  ASSERT_TRUE(rig.source.next(&f, &warning).is_ok());
+  const size_t top = rig.source.jpeg().arena().used_bytes();
+  for (const char* want : {"corrupt JPEG", "corrupt JPEG", "32x8, not 16x8"}) {
+    const Status s = rig.source.next(&f, &warning);
+    ASSERT_FALSE(s.is_ok());
+    EXPECT_NE(std::string(s.message()).find(want), std::string::npos) << s.message();
+    EXPECT_EQ(rig.source.jpeg().arena().used_bytes(), top) << "the failed frame's memory is back";
+  }
+  const Status again = rig.source.next(&f, &warning);
+  EXPECT_TRUE(again.is_ok()) << again.message();
+  EXPECT_EQ(rig.depth->queued.size(), 3u) << "every buffer went back to the driver";
+}
 
 TEST(V4l2, DeliversPairedFramesWithTheirValuesAndTimestamps) {
   Rig rig;

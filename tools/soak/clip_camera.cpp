@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "rgbdtam/hal/clock.hpp"
+#include "rgbdtam/hal/tum_replay_source.hpp"
 
 namespace rgbdtam::testing {
 namespace {
@@ -34,6 +35,30 @@ ClipCamera::ClipCamera(std::vector<std::vector<uint8_t>> gray,
   for (Node& n : nodes_) {
     for (auto& b : n.buffers) b.assign(static_cast<size_t>(width) * height * 2, 0);
   }
+}
+
+bool ClipCamera::load(const std::string& dir, std::vector<std::vector<uint8_t>>* gray,
+                      std::vector<std::vector<uint16_t>>* depth, std::vector<int64_t>* stamps_ns) {
+  constexpr int kW = 640, kH = 480;
+  TumReplaySource clip;
+  if (!clip.open(dir.c_str(), kW, kH, 20'000'000, 0).is_ok()) return false;
+  ImageU8 g;
+  ImageU16 d;
+  g.allocate(kW, kH);
+  d.allocate(kW, kH);
+  Status warning;
+  for (SensorFrame f; clip.next_into(&g, &d, &f, &warning).code() != StatusCode::kEndOfStream;) {
+    if (f.depth == nullptr) continue;
+    gray->emplace_back(g.data(), g.data() + kW * kH);
+    depth->emplace_back(d.data(), d.data() + kW * kH);
+    if (stamps_ns != nullptr) stamps_ns->push_back(f.timestamp_ns);
+  }
+  return !gray->empty();
+}
+
+void ClipCamera::send_mjpeg(std::vector<std::vector<uint8_t>> jpeg) {
+  jpeg_ = std::move(jpeg);
+  nodes_[1].fourcc = V4L2_PIX_FMT_MJPEG;
 }
 
 bool ClipCamera::unplugged(int64_t now_ns) {
@@ -77,17 +102,23 @@ int ClipCamera::close(int fd) {
   return 0;
 }
 
-void ClipCamera::fill(const Node& n, int64_t frame, std::vector<uint8_t>* out) const {
+size_t ClipCamera::fill(const Node& n, int64_t frame, std::vector<uint8_t>* out) const {
   const size_t i = static_cast<size_t>(frame) % gray_.size();
   const size_t pixels = static_cast<size_t>(width_) * height_;
   if (n.fourcc == V4L2_PIX_FMT_Z16) {
     std::memcpy(out->data(), depth_[i].data(), pixels * 2);
-    return;
+    return pixels * 2;
+  }
+  if (n.fourcc == V4L2_PIX_FMT_MJPEG) {  // a compressed frame fits in a YUYV-sized buffer
+    const std::vector<uint8_t>& jpeg = jpeg_[i % jpeg_.size()];
+    std::memcpy(out->data(), jpeg.data(), std::min(jpeg.size(), out->size()));
+    return std::min(jpeg.size(), out->size());
   }
   for (size_t p = 0; p < pixels; ++p) {
     (*out)[2 * p] = gray_[i][p];  // Y
     (*out)[2 * p + 1] = 128;      // U or V: grey
   }
+  return pixels * 2;
 }
 
 int ClipCamera::ioctl(int fd, unsigned long request, void* arg) {
@@ -134,13 +165,12 @@ int ClipCamera::ioctl(int fd, unsigned long request, void* arg) {
       auto* b = static_cast<v4l2_buffer*>(arg);
       b->index = static_cast<uint32_t>(n->queued[0]);
       std::memmove(n->queued, n->queued + 1, sizeof(int) * static_cast<size_t>(--n->queued_count));
-      fill(*n, frame, &n->buffers[b->index]);
-      b->bytesused = static_cast<uint32_t>(n->buffers[b->index].size());
+      b->bytesused = static_cast<uint32_t>(fill(*n, frame, &n->buffers[b->index]));
       b->flags = 0;
       const int64_t stamp = due_ns(frame);
       b->timestamp.tv_sec = stamp / 1000000000;
       b->timestamp.tv_usec = (stamp % 1000000000) / 1000;
-      if (n->fourcc == V4L2_PIX_FMT_YUYV) played_.fetch_add(1);
+      if (n->fourcc != V4L2_PIX_FMT_Z16) played_.fetch_add(1);
       return 0;
     }
     default:

@@ -1,5 +1,5 @@
 #pragma once
-// A V4L2 depth camera (a Z16 node and a YUYV node) behind the V4l2Io seam that plays the
+// A V4L2 depth camera (a Z16 node and a YUYV or MJPEG node) behind the V4l2Io seam that plays the
 // committed clip in a loop at a fixed rate in real time, and is unplugged for given intervals:
 // every call then fails as an unplugged device does (ENODEV, ENOENT on open). Everything is
 // allocated at construction, so the soak measures the runtime's memory, not the fake's.
@@ -8,6 +8,7 @@
 #include <atomic>
 #include <cstdint>
 #include <mutex>
+#include <string>
 #include <vector>
 
 #include "rgbdtam/hal/v4l2_source.hpp"
@@ -22,6 +23,18 @@ class ClipCamera : public V4l2Io {
   // The clip's frames (grey, raw depth), played at fps from now on.
   ClipCamera(std::vector<std::vector<uint8_t>> gray, std::vector<std::vector<uint16_t>> depth,
              int width, int height, double fps, std::vector<Outage> outages);
+
+  // The clip in `dir` decoded once (grey, raw depth, and optionally the colour stamps); false
+  // when it cannot be read.
+  static bool load(const std::string& dir, std::vector<std::vector<uint8_t>>* gray,
+                   std::vector<std::vector<uint16_t>>* depth,
+                   std::vector<int64_t>* stamps_ns = nullptr);
+  // Which clip frame a delivered buffer's timestamp is (frames count on past the clip's end).
+  int64_t frame_of(int64_t timestamp_ns) const {
+    return (timestamp_ns - start_ns_ + period_ns_ / 2) / period_ns_;
+  }
+  // Before opening: the colour node sends these (one JPEG per clip frame) as MJPEG.
+  void send_mjpeg(std::vector<std::vector<uint8_t>> jpeg);
 
   int open(const char* path, int flags) override;
   int close(int fd) override;
@@ -46,10 +59,12 @@ class ClipCamera : public V4l2Io {
   bool unplugged(int64_t now_ns);
   int64_t due_ns(int64_t frame) const;
   Node* node(int fd);
-  void fill(const Node& n, int64_t frame, std::vector<uint8_t>* out) const;
+  // The frame's bytes into a buffer; how many.
+  size_t fill(const Node& n, int64_t frame, std::vector<uint8_t>* out) const;
 
   std::vector<std::vector<uint8_t>> gray_;
   std::vector<std::vector<uint16_t>> depth_;
+  std::vector<std::vector<uint8_t>> jpeg_;
   int width_, height_;
   int64_t period_ns_;
   int64_t start_ns_;

@@ -48,22 +48,11 @@ int main(int argc, char** argv) {
   }
   const std::string root = RGBDTAM_SOURCE_DIR;
   // The clip, decoded once.
-  TumReplaySource clip;
-  if (!clip.open((root + "/data/tum_fr1_xyz_clip").c_str(), 640, 480, 20'000'000, 0).is_ok()) {
-    std::fprintf(stderr, "soak: cannot read the clip\n");
-    return 1;
-  }
   std::vector<std::vector<uint8_t>> gray;
   std::vector<std::vector<uint16_t>> depth;
-  ImageU8 g;
-  ImageU16 d;
-  g.allocate(640, 480);
-  d.allocate(640, 480);
-  Status warning;
-  for (SensorFrame f; clip.next_into(&g, &d, &f, &warning).code() != StatusCode::kEndOfStream;) {
-    if (f.depth == nullptr) continue;
-    gray.emplace_back(g.data(), g.data() + 640 * 480);
-    depth.emplace_back(d.data(), d.data() + 640 * 480);
+  if (!testing::ClipCamera::load(root + "/data/tum_fr1_xyz_clip", &gray, &depth)) {
+    std::fprintf(stderr, "soak: cannot read the clip\n");
+    return 1;
   }
   std::vector<testing::ClipCamera::Outage> outages;
   const double duration_s = frames / fps * 1.5 + 60;

@@ -3,7 +3,11 @@
 #include <png.h>
 #include <sys/stat.h>
 
+// clang-format off
 #include <cstdio>
+#include <cstdlib>
+#include <jpeglib.h>  // needs <cstdio> first
+// clang-format on
 
 namespace rgbdtam::testing {
 namespace {
@@ -111,6 +115,37 @@ std::string synthetic_config(const SyntheticScene& s) {
                 s.camera.width_px, s.camera.height_px, s.camera.fx_px, s.camera.fy_px,
                 s.camera.cx_px, s.camera.cy_px, s.depth_factor);
   return buf;
+}
+
+std::vector<uint8_t> encode_jpeg(const uint8_t* gray, int w, int h, int quality) {
+  jpeg_compress_struct c;
+  jpeg_error_mgr error;
+  c.err = jpeg_std_error(&error);
+  jpeg_create_compress(&c);
+  unsigned char* out = nullptr;
+  unsigned long size = 0;
+  jpeg_mem_dest(&c, &out, &size);
+  c.image_width = static_cast<JDIMENSION>(w);
+  c.image_height = static_cast<JDIMENSION>(h);
+  c.input_components = 3;
+  c.in_color_space = JCS_RGB;
+  jpeg_set_defaults(&c);
+  jpeg_set_quality(&c, quality, TRUE);
+  c.comp_info[0].h_samp_factor = 2;  // 4:2:2, as UVC cameras send
+  c.comp_info[0].v_samp_factor = 1;
+  jpeg_start_compress(&c, TRUE);
+  std::vector<uint8_t> row(static_cast<size_t>(w) * 3);
+  while (c.next_scanline < c.image_height) {
+    const uint8_t* in = gray + static_cast<size_t>(c.next_scanline) * w;
+    for (int x = 0; x < w; ++x) row[3 * x] = row[3 * x + 1] = row[3 * x + 2] = in[x];
+    JSAMPROW rows[1] = {row.data()};
+    jpeg_write_scanlines(&c, rows, 1);
+  }
+  jpeg_finish_compress(&c);
+  std::vector<uint8_t> jpeg(out, out + size);
+  jpeg_destroy_compress(&c);
+  std::free(out);
+  return jpeg;
 }
 
 }  // namespace rgbdtam::testing

@@ -13,6 +13,8 @@ namespace rgbdtam::testing {
 bool write_png_gray8(const std::string& path, int w, int h, const uint8_t* px);
 bool write_png_rgb8(const std::string& path, int w, int h, const uint8_t* rgb);
 bool write_png_gray16(const std::string& path, int w, int h, const uint16_t* px);
+// A grey image as the colour JPEG a UVC camera sends in MJPEG mode (YCbCr, 4:2:2 chroma).
+std::vector<uint8_t> encode_jpeg(const uint8_t* gray, int w, int h, int quality);
 
 // Renders `frames` frames of the scene's path at `fps` into a TUM folder (rgb/, depth/,
 // rgb.txt, depth.txt, groundtruth.txt, camera-to-world). Depth is stamped 5 ms after colour.

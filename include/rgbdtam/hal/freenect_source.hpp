@@ -8,8 +8,10 @@
 // approximation z = 1 / (3.3309495161 - 0.0030711016 d) m (unregistered), the one mode
 // fakenect (libfreenect's recording player) can play back.
 //
-// libfreenect is a shared library only: this backend is built when RGBDTAM_WITH_FREENECT is on
-// (the host-dynamic preset), never into the static firmware.
+// Built when RGBDTAM_WITH_FREENECT is on: static builds link libfreenect and libusb built from
+// Debian's sources (tools/build_kinect_libs.sh) and hold fakenect beside them
+// (RGBDTAM_WITH_FAKENECT: kFakenect plays the dump in $FAKENECT_PATH; it allocates per frame, so
+// it is for emulation and tests, never a robot); dynamic builds link Debian's libfreenect.
 
 #include <cstdint>
 
@@ -21,6 +23,13 @@ struct _freenect_device;
 
 namespace rgbdtam {
 
+// Which libfreenect the backend calls: the USB driver, or fakenect (static builds).
+struct FreenectDriver;
+extern const FreenectDriver kFreenectUsb;
+#if RGBDTAM_WITH_FAKENECT
+extern const FreenectDriver kFakenect;
+#endif
+
 enum class FreenectDepth { kRegistered, kRaw };
 
 class FreenectSource : public LiveSensor {
@@ -28,7 +37,8 @@ class FreenectSource : public LiveSensor {
   static constexpr int kWidth = 640, kHeight = 480;
   ~FreenectSource() override;
   // max_pair_ticks: the largest device-timestamp gap between paired depth and colour frames.
-  Status open(int device_index, FreenectDepth depth, uint32_t max_pair_ticks);
+  Status open(const FreenectDriver& driver, int device_index, FreenectDepth depth,
+              uint32_t max_pair_ticks);
   Status next(SensorFrame* frame, Status* warning) override;
   // libfreenect's event loop runs inside next(), on the caller's thread.
   Status start(const ThreadPlacement&) override { return Status::ok(); }
@@ -51,6 +61,7 @@ class FreenectSource : public LiveSensor {
   Status open_stream() override;
   void close_stream() override { close(); }
 
+  const FreenectDriver* driver_ = nullptr;
   _freenect_context* ctx_ = nullptr;
   int device_index_ = 0;
   _freenect_device* dev_ = nullptr;

@@ -1,5 +1,6 @@
 #pragma once
-// UVC RGB-D cameras through V4L2: a 16-bit depth node (Z16) and a colour node (YUYV), driven
+// UVC RGB-D cameras through V4L2: a 16-bit depth node (Z16) and a colour node (YUYV, or MJPEG
+// decoded by JpegDecoder into a buffer sized at open), driven
 // with raw ioctls and mmap buffers. Frames are paired by their buffer timestamps (same clock on
 // both nodes) and copied out, so a SensorFrame stays valid until the next one; nothing is
 // allocated per frame. The system calls go through V4l2Io, so tests script a fake device.
@@ -9,6 +10,7 @@
 #include <cstdint>
 
 #include "rgbdtam/core/image.hpp"
+#include "rgbdtam/hal/jpeg_decoder.hpp"
 #include "rgbdtam/hal/sensor_source.hpp"
 
 namespace rgbdtam {
@@ -74,11 +76,14 @@ class V4l2Stream {
   bool streaming_ = false;
 };
 
+enum class V4l2Colour { kYuyv, kMjpeg };
+
 class V4l2Source : public LiveSensor {
  public:
-  // depth_path: the Z16 node; colour_path: the YUYV node; frames width x height on both.
+  // depth_path: the Z16 node; colour_path: the colour node (YUYV or MJPEG); frames width x
+  // height on both.
   Status open(V4l2Io* io, const char* depth_path, const char* colour_path, int width, int height,
-              int64_t max_pair_dt_ns, int timeout_ms);
+              int64_t max_pair_dt_ns, int timeout_ms, V4l2Colour colour = V4l2Colour::kYuyv);
   Status next(SensorFrame* frame, Status* warning) override;
   // The streams run from open(); start() and stop() have nothing more to do.
   Status start(const ThreadPlacement&) override { return Status::ok(); }
@@ -86,6 +91,7 @@ class V4l2Source : public LiveSensor {
   int64_t arrival_ns() const override { return arrival_ns_; }
   uint32_t dropped() const override { return counters_.overtaken; }
   const V4l2Counters& counters() const { return counters_; }
+  const JpegDecoder& jpeg() const { return jpeg_; }
   void close();
 
  private:
@@ -95,6 +101,8 @@ class V4l2Source : public LiveSensor {
   V4l2Io* io_ = nullptr;
   char depth_path_[128] = {}, colour_path_[128] = {};
   V4l2Stream depth_, colour_;
+  V4l2Colour colour_format_ = V4l2Colour::kYuyv;
+  JpegDecoder jpeg_;
   ImageU8 gray_;
   ImageU16 depth_img_;
   int width_ = 0, height_ = 0;

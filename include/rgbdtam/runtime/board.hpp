@@ -20,9 +20,10 @@ struct Board {
   int cpu_count = 1;             // cores the thread placement may name
   int memory_budget_mb = 0;      // what init may allocate; 0: half of the machine's memory
 
-  char sensor_kind[kTextBytes] = "";             // replay | openni2 | freenect | v4l2
+  char sensor_kind[kTextBytes] = "";             // replay | openni2 | freenect | fakenect | v4l2
   char sensor_device[kTextBytes] = "";           // replay: a TUM folder; else a device path or URI
   char sensor_config[kTextBytes] = "";           // the camera/tracking params file (config/)
+  char sensor_colour[kTextBytes] = "yuyv";       // v4l2: yuyv or mjpeg (the colour node's format)
   char sensor_depth[kTextBytes] = "registered";  // freenect: registered (mm) or raw (11-bit)
   char sensor_usb_id[kTextBytes] = "";           // vvvv:pppp that must be attached; "" = none
   char sysfs_root[kTextBytes] = "/sys";          // where sysfs is mounted
@@ -56,6 +57,8 @@ struct Board {
 
 // Parses a board file's text (source names it in errors) and resolves its relative paths
 // against board_dir (the folder the file is in).
+// replay and fakenect read a folder, written relative to the board folder.
+bool sensor_device_is_a_folder(const Board& b);
 Status parse_board(const char* text, const char* source, const char* board_dir, Board* out);
 // One `key=value` override, e.g. from the command line; a relative path is relative to the
 // board folder, as in the board file.
