@@ -9,12 +9,13 @@
 
 // The libfreenect calls the backend makes, as a table: the firmware can hold the USB driver and
 // fakenect (libfreenect's recording player, its symbols renamed fakenect_*) side by side.
-#define RGBDTAM_FREENECT_CALLS(X)                                                                 \
-  X(init)                                                                                         \
-  X(shutdown) X(select_subdevices) X(num_devices) X(open_device) X(close_device) X(set_user)      \
-      X(get_user) X(find_video_mode) X(find_depth_mode) X(set_video_mode) X(set_depth_mode)       \
-          X(set_depth_callback) X(set_video_callback) X(start_depth) X(start_video) X(stop_depth) \
-              X(stop_video) X(process_events_timeout)
+// clang-format off
+#define RGBDTAM_FREENECT_CALLS(X)                                                          \
+  X(init) X(shutdown) X(select_subdevices) X(num_devices) X(open_device) X(close_device)   \
+  X(set_user) X(get_user) X(find_video_mode) X(find_depth_mode) X(set_video_mode)          \
+  X(set_depth_mode) X(set_depth_callback) X(set_video_callback) X(start_depth)             \
+  X(start_video) X(stop_depth) X(stop_video) X(process_events_timeout)
+// clang-format on
 
 #if RGBDTAM_WITH_FAKENECT
 #define RGBDTAM_DECLARE_FAKENECT(call) extern "C" decltype(freenect_##call) fakenect_##call;

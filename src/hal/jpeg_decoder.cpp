@@ -1,6 +1,7 @@
 #include "rgbdtam/hal/jpeg_decoder.hpp"
 
 // clang-format off
+#include <atomic>
 #include <csetjmp>
 #include <cstdio>
 #include <cstdlib>
@@ -23,27 +24,45 @@ struct BlockHeader {
 constexpr size_t kHeader = aligned(sizeof(BlockHeader));
 constexpr size_t kFooter = aligned(sizeof(size_t));
 
-// What libjpeg's client_data points to for a decompressor of ours.
-constexpr uint32_t kArenaMagic = 0x6a706567;  // "jpeg"
-struct ArenaTag {
-  uint32_t magic;
-  JpegArena* arena;
-};
+// The arenas of open decoders; a decompressor of ours has its arena as libjpeg's client_data.
+// Another libjpeg user's client_data (its own, or never set) is compared with these, never
+// dereferenced.
+constexpr int kMaxDecoders = 8;
+std::atomic<JpegArena*> g_arenas[kMaxDecoders];
 
 JpegArena* arena_of(j_common_ptr cinfo) {
-  const auto* tag = static_cast<const ArenaTag*>(cinfo->client_data);
-  return tag != nullptr && tag->magic == kArenaMagic ? tag->arena : nullptr;
+  if (cinfo->client_data == nullptr) return nullptr;
+  for (const auto& arena : g_arenas) {
+    if (arena.load(std::memory_order_acquire) == cinfo->client_data) {
+      return static_cast<JpegArena*>(cinfo->client_data);
+    }
+  }
+  return nullptr;
+}
+
+bool register_arena(JpegArena* arena) {
+  for (auto& slot : g_arenas) {
+    JpegArena* empty = nullptr;
+    if (slot.compare_exchange_strong(empty, arena)) return true;
+  }
+  return false;
+}
+
+void unregister_arena(JpegArena* arena) {
+  for (auto& slot : g_arenas) {
+    JpegArena* mine = arena;
+    slot.compare_exchange_strong(mine, nullptr);
+  }
 }
 
 }  // namespace
 
-Status JpegArena::allocate(size_t capacity_bytes) {
+void JpegArena::allocate(size_t capacity_bytes) {
   memory_.reset(new uint8_t[capacity_bytes + kAlign]);
   const auto address = reinterpret_cast<uintptr_t>(memory_.get());
   base_ = memory_.get() + (aligned(address) - address);
   capacity_ = capacity_bytes;
   top_ = peak_ = 0;
-  return Status::ok();
 }
 
 void* JpegArena::get(size_t bytes) {
@@ -93,7 +112,6 @@ void on_message(j_common_ptr cinfo) {
 }  // namespace
 
 struct JpegDecoder::State {
-  ArenaTag tag;
   jpeg_decompress_struct cinfo;
   JpegError error;
   std::unique_ptr<JSAMPROW[]> rows;
@@ -104,6 +122,7 @@ JpegDecoder::JpegDecoder() : state_(new State) {}
 
 JpegDecoder::~JpegDecoder() {
   if (state_->created) jpeg_destroy_decompress(&state_->cinfo);
+  unregister_arena(&arena_);
 }
 
 Status JpegDecoder::open(int width, int height) {
@@ -116,14 +135,17 @@ Status JpegDecoder::open(int width, int height) {
   // Progressive JPEGs keep every coefficient (2 bytes per sample, 3 components); baseline
   // ones, what UVC cameras send, need far less.
   const size_t pixels = static_cast<size_t>(width) * static_cast<size_t>(height);
-  RGBDTAM_RETURN_IF_ERROR(arena_.allocate(pixels * 6 + (1u << 20)));
+  arena_.allocate(pixels * 6 + (1u << 20));
+  unregister_arena(&arena_);
+  if (!register_arena(&arena_)) {
+    return Status::error(StatusCode::kOutOfRange, "more than %d JPEG decoders open", kMaxDecoders);
+  }
   State& s = *state_;
-  s.tag = {kArenaMagic, &arena_};
   s.rows.reset(new JSAMPROW[static_cast<size_t>(height)]);
   s.cinfo.err = jpeg_std_error(&s.error.manager);
   s.error.manager.error_exit = on_error;
   s.error.manager.output_message = on_message;
-  s.cinfo.client_data = &s.tag;
+  s.cinfo.client_data = &arena_;
   if (setjmp(s.error.jump) != 0) {
     return Status::error(StatusCode::kOutOfRange, "libjpeg: %s", s.error.message);
   }

@@ -52,6 +52,27 @@ std::vector<uint8_t> pattern(int level) {
   return g;
 }
 
+TEST(JpegArena, FreedBlocksReturnFromTheTopAndTheArenaRefusesWhatDoesNotFit) {
+  JpegArena arena;
+  arena.allocate(1024);
+  void* a = arena.get(100);
+  const size_t after_a = arena.used_bytes();
+  void* b = arena.get(100);
+  void* c = arena.get(100);
+  ASSERT_NE(a, nullptr);
+  ASSERT_NE(c, nullptr);
+  EXPECT_EQ(reinterpret_cast<uintptr_t>(b) % 16, 0u);
+  const size_t top = arena.used_bytes();
+  arena.put(b);  // below c: kept until c goes
+  EXPECT_EQ(arena.used_bytes(), top);
+  arena.put(c);
+  EXPECT_EQ(arena.used_bytes(), after_a) << "b and c both returned";
+  EXPECT_EQ(arena.get(2000), nullptr);
+  arena.put(a);
+  EXPECT_EQ(arena.used_bytes(), 0u);
+  EXPECT_EQ(arena.peak_bytes(), top);
+}
+
 TEST(V4l2Mjpeg, ColourFramesAreDecodedToTheirLuma) {
   Rig rig(V4L2_PIX_FMT_Z16, V4l2Colour::kMjpeg);
   for (int level = 0; level < 3; ++level) {

@@ -118,7 +118,7 @@ std::string synthetic_config(const SyntheticScene& s) {
 }
 
 std::vector<uint8_t> encode_jpeg(const uint8_t* gray, int w, int h, int quality) {
-  jpeg_compress_struct c;
+  jpeg_compress_struct c{};  // libjpeg keeps client_data as given: zero, not stack garbage
   jpeg_error_mgr error;
   c.err = jpeg_std_error(&error);
   jpeg_create_compress(&c);

@@ -8,8 +8,9 @@
 // them instead of libjpeg's malloc-based jmemnobs). Blocks are freed from the top of the arena:
 // libjpeg frees each image's pool when the image is done, so the arena returns to the same top
 // after every frame; tables it keeps for the next image stay below. A JPEG that would need more
-// than the arena is a decode error, not an allocation. libjpeg users without an arena (none in
-// the firmware) fall back to malloc.
+// than the arena is a decode error, not an allocation. Other libjpeg users (none in the static
+// firmware; OpenNI2's recorder in a dynamic build) keep malloc: an arena is found by comparing
+// libjpeg's client_data with the open decoders' arenas (at most 8), never by dereferencing it.
 
 #include <cstddef>
 #include <cstdint>
@@ -21,8 +22,8 @@ namespace rgbdtam {
 
 class JpegArena {
  public:
-  Status allocate(size_t capacity_bytes);
-  void* get(size_t bytes);
+  void allocate(size_t capacity_bytes);
+  void* get(size_t bytes);  // null when it does not fit
   void put(void* block);
   size_t used_bytes() const { return top_; }
   size_t peak_bytes() const { return peak_; }
