@@ -45,15 +45,16 @@ build host-dynamic rgbdtam test_freenect test_openni2 rgbdtam-vs-opencv
 check host-dynamic -R '^(Freenect|OpenNi2)\.'
 # Raspberry Pi 4: static, Kinect v1; its whole suite under qemu through the HIL runner.
 build aarch64-raspberry-pi-4
-tools/hil/run.py raspberry-pi-4 qemu: --exclude-label long
+# -j3: some of these tests wait on fake sensors that play at their frame rate.
+tools/hil/run.py raspberry-pi-4 qemu: -j3
 file build/aarch64-raspberry-pi-4/bin/rgbdtam | grep -q "ARM aarch64.*statically linked" \
   || { echo "the Raspberry Pi 4's rgbdtam is not a static ARM binary" >&2; exit 1; }
 # The runner's SSH transport, to an sshd on loopback that runs the binaries under qemu.
 tools/hil/ssh_loopback_check.sh raspberry-pi-4
 # Radxa ROCK 5B: dynamic for OpenNI2's driver plugins. qemu runs its board and firmware tests;
 # OpenNI2's initialise hangs under qemu-user, so the Xtion itself is a hardware test.
-build aarch64-radxa-rock-5b rgbdtam test_runtime
-check aarch64-radxa-rock-5b -R '^(Board|BoardBuild|Firmware|Params|V4l2Mjpeg)\.'
+build aarch64-radxa-rock-5b rgbdtam
+check aarch64-radxa-rock-5b -R '^(BoardBuild|Firmware)\.'
 echo "=== fuzz: every parser, briefly ($(date +%T))"
 tools/fuzz.sh 10
 echo "=== each board's firmware"

@@ -25,20 +25,22 @@ namespace rgbdtam {
 namespace {
 
 void usage() {
-  std::fprintf(stderr,
-               "usage:\n"
-               "  rgbdtam replay <sequence-dir> --config <file> [--trajectory out.txt]\n"
-               "                 [--final-trajectory out.txt] [--map map.ply]\n"
-               "                 [--set key=value]... [--max-frames N] [--quiet] [--json]\n"
-               "  rgbdtam eval <groundtruth.txt> <estimate.txt> [--json] [--frames rgb.txt]\n"
-               "               [--plot out.svg]\n"
-               "  rgbdtam params --config <file> [--set key=value]...\n"
-               "  rgbdtam run --board <board-folder> [--board-set key=value]...\n"
-               "              [--set key=value]... [--max-frames N] [--quiet]\n"
-               "  rgbdtam record --board <board-folder> <out-dir> [--board-set key=value]...\n"
-               "                 [--max-frames N]\n"
-               "  rgbdtam vocabulary train <sequence-dir>... --config <file> --out <file>\n"
-               "sensor backends in this build: " RGBDTAM_HAL_BACKENDS "\n");
+  std::fprintf(
+      stderr,
+      "usage:\n"
+      "  rgbdtam replay <sequence-dir> --config <file> [--trajectory out.txt]\n"
+      "                 [--final-trajectory out.txt] [--map map.ply]\n"
+      "                 [--set key=value]... [--max-frames N] [--quiet] [--json]\n"
+      "  rgbdtam eval <groundtruth.txt> <estimate.txt> [--json] [--frames rgb.txt]\n"
+      "               [--plot out.svg]\n"
+      "  rgbdtam params --config <file> [--set key=value]...\n"
+      "  rgbdtam run --board <board-folder> [--board-set key=value]...\n"
+      "              [--set key=value]... [--max-frames N] [--quiet]\n"
+      "  rgbdtam check --board <board-folder> [--board-set key=value]... [--set key=value]...\n"
+      "  rgbdtam record --board <board-folder> <out-dir> [--board-set key=value]...\n"
+      "                 [--max-frames N]\n"
+      "  rgbdtam vocabulary train <sequence-dir>... --config <file> --out <file>\n"
+      "sensor backends in this build: " RGBDTAM_HAL_BACKENDS "\n");
 }
 
 // --max-frames: a whole number of frames, 0 for all. False (with the message) for anything else.
@@ -330,6 +332,25 @@ int run_command(int argc, char** argv) {
   return 0;
 }
 
+// What run checks before it opens anything, without opening the sensor: the board file and its
+// overrides, the params file, and that this build has the board's sensor backend.
+int check_command(int argc, char** argv) {
+  RunOptions options;
+  if (!parse_run_options(argc, argv, &options, nullptr, "check")) return 2;
+  Board board;
+  Params params;
+  Status s = load_board_and_params(options, &board, &params);
+  if (s.is_ok() && !sensor_backend_in_build(board.sensor_kind)) s = missing_backend_error(board);
+  if (!s.is_ok()) {
+    std::fprintf(stderr, "rgbdtam check: %s\n", s.message());
+    return 1;
+  }
+  std::printf("board %s: sensor %s, in this build (backends: %s); link %s; %dx%d at %.0f Hz\n",
+              board.name, board.sensor_kind, RGBDTAM_HAL_BACKENDS, board.link_kind,
+              params.camera.width_px, params.camera.height_px, board.sensor_fps);
+  return 0;
+}
+
 int record_command(int argc, char** argv) {
   RunOptions options;
   const char* out_dir = nullptr;
@@ -374,6 +395,7 @@ int main(int argc, char** argv) {
   if (std::strcmp(verb, "params") == 0) return rgbdtam::params_command(argc - 2, argv + 2);
   if (std::strcmp(verb, "run") == 0) return rgbdtam::run_command(argc - 2, argv + 2);
   if (std::strcmp(verb, "record") == 0) return rgbdtam::record_command(argc - 2, argv + 2);
+  if (std::strcmp(verb, "check") == 0) return rgbdtam::check_command(argc - 2, argv + 2);
   if (std::strcmp(verb, "vocabulary") == 0) {
     return rgbdtam::vocabulary_command(argc - 2, argv + 2);
   }

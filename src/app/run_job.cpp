@@ -132,11 +132,15 @@ Status open_backend(const Board& board, const Params& params, BoardSensor* senso
     return Status::ok();
   }
 #endif
+  return missing_backend_error(board);
+}
+}  // namespace
+
+Status missing_backend_error(const Board& board) {
   return Status::error(StatusCode::kInvalidArgument,
                        "board '%s': this build has no '%s' sensor backend (it has: %s)", board.name,
                        board.sensor_kind, RGBDTAM_HAL_BACKENDS);
 }
-}  // namespace
 
 Status open_board_sensor(const Board& board, const Params& params, BoardSensor* sensor,
                          V4l2Io* v4l2_io) {

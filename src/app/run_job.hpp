@@ -39,6 +39,8 @@ Status load_board(const char* board_dir, Board* out);
 Status load_board_and_params(const RunOptions& options, Board* board, Params* params);
 // Whether this build has the backend a sensor.kind names (RGBDTAM_HAL_BACKENDS lists them).
 bool sensor_backend_in_build(const char* kind);
+// "this build has no '<kind>' sensor backend (it has: ...)", naming the board.
+Status missing_backend_error(const Board& board);
 // The board's sensor, whichever backend its sensor.kind names (those this build has).
 struct BoardSensor {
   TumReplaySource replay;

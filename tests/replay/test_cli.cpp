@@ -92,6 +92,19 @@ TEST(Cli, AFakenectFolderWithoutADumpIsAClearError) {
 }
 #endif
 
+#if !RGBDTAM_WITH_OPENNI2
+TEST(Cli, CheckRefusesABoardWhoseSensorThisBuildLacks) {
+  const Outcome ok = rgbdtam("check --board " + testing::source_path("board/host-emulation"));
+  EXPECT_EQ(ok.exit_code, 0) << ok.err;
+  const Outcome o = rgbdtam("check --board " + testing::source_path("board/radxa-rock-5b"));
+  EXPECT_EQ(o.exit_code, 1);
+  EXPECT_NE(
+      o.err.find("board 'radxa-rock-5b': this build has no 'openni2' sensor backend (it has:"),
+      std::string::npos)
+      << o.err;
+}
+#endif
+
 TEST(Cli, ABadFrameCountIsAUsageError) {
   const Outcome o = rgbdtam("replay " + clip() + " --config " + config() + " --max-frames abc");
   EXPECT_EQ(o.exit_code, 2);

@@ -206,10 +206,11 @@ def main():
             key, value = assignment.split("=", 1)
             env[key] = value
 
-    # The firmware itself first: it must start and report its backends.
-    firmware = transport.run(["bin/rgbdtam", "--help"], env, 120)
-    backends = re.search(r"sensor backends in this build: (.*)", firmware.stdout)
-    print(f"hil: firmware: {backends.group(1) if backends else 'no backend list: ' + firmware.stdout[-200:]}")
+    # The firmware itself first: it must start, and hold the board's sensor backend.
+    firmware = transport.run(["bin/rgbdtam", "check", "--board", f"source/board/{args.board}"],
+                             env, 120)
+    print(f"hil: firmware: {firmware.stdout.strip()}")
+    firmware_ok = firmware.returncode == 0
 
     # Every test of every binary, one process each, as ctest runs them.
     tests, skipped = [], []
@@ -275,6 +276,10 @@ def main():
                 print(output[-4000:])
     transport.close()
 
+    if firmware_ok:
+        passed += 1
+    else:
+        failed.append("BoardBuild.TheBoardsSensorIsInThisBuild (rgbdtam check)")
     ran = passed + len(failed)
     print(f"\n{100 * passed // max(ran, 1)}% tests passed, {len(failed)} tests failed out of {ran} "
           f"run on the board ({time.time() - started:.0f} s)")
