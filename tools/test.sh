@@ -45,8 +45,7 @@ build host-dynamic rgbdtam test_freenect test_openni2 rgbdtam-vs-opencv
 check host-dynamic -R '^(Freenect|OpenNi2)\.'
 # Raspberry Pi 4: static, Kinect v1; its whole suite under qemu through the HIL runner.
 build aarch64-raspberry-pi-4
-# -j3: some of these tests wait on fake sensors that play at their frame rate.
-tools/hil/run.py raspberry-pi-4 qemu: -j3
+tools/hil/run.py raspberry-pi-4 qemu:
 file build/aarch64-raspberry-pi-4/bin/rgbdtam | grep -q "ARM aarch64.*statically linked" \
   || { echo "the Raspberry Pi 4's rgbdtam is not a static ARM binary" >&2; exit 1; }
 # The runner's SSH transport, to an sshd on loopback that runs the binaries under qemu.

@@ -4,7 +4,7 @@ the board, with results collected as ctest would.
 
   tools/hil/run.py <board> <address> [--attached sensor,gpio-loopback,...] [-j N]
                    [--exclude-label long] [--only REGEX] [--remote-prefix CMD]
-                   [--ssh-config FILE]
+                   [--binary NAME]... [--ssh-config FILE]
 
 <board> is a folder name under board/; its build.preset names the build (build/<preset>).
 <address> is where the board is:
@@ -159,6 +159,8 @@ def main():
     parser.add_argument("--attached", default="", help="hardware the rack provides, comma-separated")
     parser.add_argument("--exclude-label", action="append", default=[])
     parser.add_argument("--only", default="", help="run only tests whose name matches")
+    parser.add_argument("--binary", action="append", default=[],
+                        help="copy and run only this test binary (repeatable)")
     parser.add_argument("--remote-prefix", default="", help="command that runs each binary there")
     parser.add_argument("--ssh-config", default="", help="an ssh_config file for ssh and scp")
     parser.add_argument("-j", type=int, default=os.cpu_count() or 2)
@@ -176,7 +178,8 @@ def main():
     with open(listing) as f:
         for line in f:
             name, label = line.split()
-            if label not in args.exclude_label and os.path.exists(os.path.join(build, "bin", name)):
+            wanted = not args.binary or name in args.binary
+            if wanted and label not in args.exclude_label and os.path.exists(os.path.join(build, "bin", name)):
                 binaries.append(name)
     manifest, wiring = read_manifest(args.board)
     attached = [a for a in args.attached.split(",") if a]

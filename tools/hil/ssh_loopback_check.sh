@@ -48,7 +48,8 @@ for _ in $(seq 50); do
 done
 echo "=== HIL runner over SSH to sshd on 127.0.0.1:$port ($(date +%T))"
 tools/hil/run.py "$board" "$(id -un)@127.0.0.1:$port" --ssh-config "$dir/ssh_config" \
-  --remote-prefix qemu-aarch64 --only '^(Board|BoardBuild|Hardware|Mavlink)\.' || {
+  --remote-prefix qemu-aarch64 --binary test_runtime --binary test_link --binary test_hardware \
+  --only '^(Board|Hardware|Mavlink)\.' || {
   echo "sshd's log:" >&2
   cat "$dir/sshd.log" >&2
   exit 1
