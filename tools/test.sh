@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The test command: host release build with every test (the full fr1_xyz test runs where the
 # sequence exists) and the live page in headless Chromium, host debug build under
-# ASan+UBSan, the dynamic build's shared-library sensor backends, each board's own firmware
+# ASan+UBSan with the shared-library sensor backends, each board's own firmware
 # build (the Raspberry Pi 4's static one runs the whole aarch64 suite under qemu-user through
 # the HIL runner's stand-in transport; the ROCK 5B's dynamic OpenNI2 one runs what qemu can),
 # and a short fuzzing run of every parser. The slow full-sequence tests are left to the release
@@ -37,12 +37,10 @@ echo "=== node-mavlink: the link as an independent decoder sees it ($(date +%T))
 node tools/mavlink-check/check.mjs build/bin/rgbdtam board/host-emulation
 echo "=== the monitor's live page in headless Chromium ($(date +%T))"
 node tools/mavlink-check/page-check.mjs build/bin board/host-emulation build/monitor-page
+# With the shared-library backends: Debian's libfreenect against its fakenect, OpenNI2's Dummy
+# device; it also compiles rgbdtam-vs-opencv (the host-dynamic preset's benchmark).
 build host-debug
 check host-debug -LE long
-# Debian's shared libfreenect (against Debian's fakenect), OpenNI2's Dummy device, and
-# rgbdtam-vs-opencv; everything else is the same code as the host-release build's.
-build host-dynamic rgbdtam test_freenect test_openni2 rgbdtam-vs-opencv
-check host-dynamic -R '^(Freenect|OpenNi2)\.'
 # Raspberry Pi 4: static, Kinect v1; its whole suite under qemu through the HIL runner.
 build aarch64-raspberry-pi-4
 tools/hil/run.py raspberry-pi-4 qemu:

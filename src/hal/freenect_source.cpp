@@ -119,13 +119,18 @@ Status FreenectSource::open_stream() {
 
 void FreenectSource::on_depth(const void* data, uint32_t ticks) {
   if (have_depth_) ++dropped_;  // overtaken before it was paired: the newest is kept
-  const auto* in = static_cast<const uint16_t*>(data);
+  // Bytes, not uint16_t: fakenect hands over its file buffer just past an odd-length header.
+  const auto* in = static_cast<const uint8_t*>(data);
   uint16_t* out = depth_.data();
   const int n = kWidth * kHeight;
   if (depth_mode_ == FreenectDepth::kRegistered) {
     std::memcpy(out, in, sizeof(uint16_t) * static_cast<size_t>(n));
   } else {
-    for (int i = 0; i < n; ++i) out[i] = raw_lut_[in[i] & 2047];
+    for (int i = 0; i < n; ++i) {
+      uint16_t raw;
+      std::memcpy(&raw, in + 2 * i, sizeof(raw));
+      out[i] = raw_lut_[raw & 2047];
+    }
   }
   depth_ticks_ = ticks;
   have_depth_ = true;
