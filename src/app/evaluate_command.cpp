@@ -45,7 +45,7 @@ void print_report(const EvaluationReport& r, bool json, const char* label) {
         .integer("false_valid_checked", f.checked)
         .number("false_valid_worst_trans_cm", f.worst_translation_m * 100)
         .number("false_valid_worst_rot_deg", f.worst_rotation_deg);
-    if (f.count > 0) j.number("false_valid_first_stamp_s", f.first_stamp_s, 6);
+    if (f.count > 0) j.number("false_valid_first_stamp_s", f.first_stamp_s(), 6);
     j.end();
     return;
   }
@@ -73,7 +73,7 @@ void print_report(const EvaluationReport& r, bool json, const char* label) {
       "worst %.2f cm, %.2f deg",
       limits.window_s, limits.max_translation_m * 100, limits.max_rotation_deg, f.count, f.checked,
       f.worst_translation_m * 100, f.worst_rotation_deg);
-  if (f.count > 0) std::printf("; first at %.6f s", f.first_stamp_s);
+  if (f.count > 0) std::printf("; first at %.6f s", f.first_stamp_s());
   std::printf("\n");
   if (r.nees.pairs > 0) {
     std::printf(

@@ -226,7 +226,7 @@ FalseValidResult evaluate_false_valid(const std::vector<StampedPose>& gt,
     out.worst_translation_m = std::max(out.worst_translation_m, trans);
     out.worst_rotation_deg = std::max(out.worst_rotation_deg, rot);
     if (trans > limits.max_translation_m || rot > limits.max_rotation_deg) {
-      if (out.count++ == 0) out.first_stamp_s = est[i].stamp_s;
+      ++out.count;
       out.stamps_s.push_back(est[i].stamp_s);
     }
   }

@@ -127,7 +127,7 @@ TEST(FalseValid, ExactCopyHasNoneAndAJumpCountsWhileInTheWindow) {
   r = evaluate_false_valid(gt, est);
   EXPECT_EQ(r.count, 12);
   EXPECT_NEAR(r.worst_translation_m, 0.12, 1e-9);
-  EXPECT_DOUBLE_EQ(r.first_stamp_s, est[50].stamp_s);
+  EXPECT_DOUBLE_EQ(r.first_stamp_s(), est[50].stamp_s);
   // A 1 s gap: the estimate after it has nothing in its window and is not checked.
   est.erase(est.begin() + 70, est.begin() + 95);
   r = evaluate_false_valid(gt, est);

@@ -59,8 +59,8 @@ struct FalseValidResult {
   int checked = 0;  // poses with an earlier estimate in the window and ground truth at both
   int count = 0;
   double worst_translation_m = 0, worst_rotation_deg = 0;
-  double first_stamp_s = 0;      // of the first false-valid pose, when count > 0
   std::vector<double> stamps_s;  // of every false-valid pose
+  double first_stamp_s() const { return stamps_s.empty() ? 0.0 : stamps_s.front(); }
 };
 FalseValidResult evaluate_false_valid(const std::vector<StampedPose>& gt,
                                       const std::vector<StampedPose>& est,
