@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The robustness table: every development sequence and its stress variants (faster motion by
 # decimation, synthetic motion blur, dropped depth, a sensor outage, a kidnapped frame, a
-# synthetic fast pan), one row each.
+# synthetic fast pan), and the degenerate synthetic scenes (a plain corridor and a plain room
+# crossed at 2.4 m/s), one row each.
 # Variants are generated once into build/stress/ by build/bin/rgbdtam-stress.
 #   tools/robustness.sh [--set key=value]...     (TUM data: ../shared/data/tum or RGBDTAM_TUM)
 # ATE is over all frames; false-valid = poses reported tracked whose motion over the preceding
@@ -41,6 +42,8 @@ make_variant pan180 "$stress" pan "$cache/pan180" --peak-deg-s 180
 make_variant pan180_blur20 "$stress" blur "$cache/pan180" "$cache/pan180_blur20" --config "$cache/pan180/camera.conf" --exposure-ms 20
 make_variant pan300 "$stress" pan "$cache/pan300" --peak-deg-s 300
 make_variant pan360 "$stress" pan "$cache/pan360" --peak-deg-s 360
+make_variant corridor "$stress" degenerate "$cache/corridor" --scene corridor --frames 188
+make_variant plain_room "$stress" degenerate "$cache/plain_room" --scene room --frames 188
 
 rows=(
   "fr1_xyz $tum/fr1_xyz config/tum_fr1.conf"
@@ -62,6 +65,8 @@ rows=(
   "pan180_blur20 $cache/pan180_blur20 $cache/pan180/camera.conf"
   "pan300 $cache/pan300 $cache/pan300/camera.conf"
   "pan360 $cache/pan360 $cache/pan360/camera.conf"
+  "corridor $cache/corridor $cache/corridor/camera.conf"
+  "plain_room $cache/plain_room $cache/plain_room/camera.conf"
 )
 printf '| %-18s | %6s | %7s | %8s | %11s | %5s | %7s | %6s | %9s | %8s | %6s |\n' sequence frames "ATE cm" coverage false-valid lost retried resets keyframes "track ms" "p95 ms"
 printf '|%s|%s|%s|%s|%s|%s|%s|%s|%s|%s|%s|\n' -------------------- -------- --------- ---------- ------------- ------- --------- -------- ----------- ---------- --------

@@ -18,6 +18,7 @@ bool FrontendFrames::load(int i) {
   Status warning;
   if (!source_.next(&f, &warning).is_ok() || f.depth == nullptr) return false;
   undistorter_.undistort_gray(f.gray, &frame_.gray(0));
+  frame_.build_gray();
   frame_.build_inverse_depth(f.depth, undistorter_);
   return true;
 }

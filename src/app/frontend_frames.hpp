@@ -13,6 +13,7 @@ class FrontendFrames {
  public:
   Status open(const char* sequence, const Params& params);
   int count() const { return source_.frame_count(); }
+  int64_t timestamp_ns(int i) const { return source_.rgb_list().entries[i].timestamp_ns; }
   // Frame i into frame(); false when it cannot be read or has no depth.
   bool load(int i);
   const FramePyramid& frame() const { return frame_; }

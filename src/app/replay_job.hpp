@@ -52,7 +52,7 @@ class ReplayJob {
   const TumReplaySource& source() const { return source_; }
   const MappingModule& mapper() const { return system_.mapper(); }
   bool loop_enabled() const { return system_.loop_enabled(); }
-  const LoopCounters& loop_counters() const { return system_.loop().counters(); }
+  const LoopModule& loop() const { return system_.loop(); }
 
  private:
   ReplayOptions options_;

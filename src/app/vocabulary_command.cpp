@@ -23,7 +23,67 @@ struct TrainOptions {
   int every = 5;  // frames
   int branching = 10;
   int depth = 4;
+  bool augment = false;
 };
+
+// The variations of a frame that training may add, so that the words cover what the same
+// place looks like to another camera or in another moment: mirrored (other arrangements of
+// the same patterns), blurred (a moving hand-held camera), nearer (another scale: FAST has
+// one), and dim and noisy (another exposure and sensor).
+enum class Variation { kAsRecorded, kMirrored, kBlurred, kNearer, kDimNoisy };
+constexpr Variation kVariations[] = {Variation::kAsRecorded, Variation::kMirrored,
+                                     Variation::kBlurred, Variation::kNearer, Variation::kDimNoisy};
+
+void vary(const ImageF& gray, const ImageF& inverse_depth, Variation v, uint32_t seed,
+          ImageF* out_gray, ImageF* out_inverse_depth) {
+  const int w = gray.width(), h = gray.height();
+  constexpr float kZoom = 1.3f;   // nearer: the centre, enlarged
+  constexpr int kBlurRadius = 2;  // a 5x5 box
+  uint32_t state = seed * 2654435761u + 1u;
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      float g = gray.at(x, y), rho = inverse_depth.at(x, y);
+      switch (v) {
+        case Variation::kAsRecorded:
+          break;
+        case Variation::kMirrored:
+          g = gray.at(w - 1 - x, y);
+          rho = inverse_depth.at(w - 1 - x, y);
+          break;
+        case Variation::kBlurred: {
+          float sum = 0.f;
+          int n = 0;
+          for (int dy = -kBlurRadius; dy <= kBlurRadius; ++dy) {
+            for (int dx = -kBlurRadius; dx <= kBlurRadius; ++dx) {
+              const int xx = x + dx, yy = y + dy;
+              if (xx < 0 || yy < 0 || xx >= w || yy >= h) continue;
+              sum += gray.at(xx, yy);
+              ++n;
+            }
+          }
+          g = sum / static_cast<float>(n);
+          break;
+        }
+        case Variation::kNearer: {
+          const float sx = (static_cast<float>(x) - 0.5f * w) / kZoom + 0.5f * w;
+          const float sy = (static_cast<float>(y) - 0.5f * h) / kZoom + 0.5f * h;
+          g = sample_bilinear(gray, std::min(sx, w - 1.001f), std::min(sy, h - 1.001f));
+          // Nearer by the zoom: inverse depth grows with it (the nearest sample, not blended
+          // across depth edges).
+          rho = kZoom * inverse_depth.at(static_cast<int>(sx + 0.5f), static_cast<int>(sy + 0.5f));
+          break;
+        }
+        case Variation::kDimNoisy:
+          state = state * 1664525u + 1013904223u;
+          g = 0.6f * g + 0.1f +
+              (static_cast<float>(state >> 8) / 16777216.f - 0.5f) * (8.f / 255.f);
+          break;
+      }
+      out_gray->at(x, y) = g;
+      out_inverse_depth->at(x, y) = rho;
+    }
+  }
+}
 
 bool parse_whole(const char* text, int lo, int hi, int* out) {
   errno = 0;
@@ -34,8 +94,9 @@ bool parse_whole(const char* text, int lo, int hi, int* out) {
   return true;
 }
 
-// The descriptors of every `every`-th frame of one sequence, one image per entry.
-Status collect(const char* sequence, const Params& p, int every,
+// The descriptors of every `every`-th frame of one sequence (and of its variations), one image
+// per entry.
+Status collect(const char* sequence, const Params& p, int every, bool augment,
                std::vector<std::vector<Descriptor>>* images) {
   FrontendFrames frames;
   RGBDTAM_RETURN_IF_ERROR(frames.open(sequence, p));
@@ -45,13 +106,21 @@ Status collect(const char* sequence, const Params& p, int every,
   extractor.allocate(p.camera.width_px, p.camera.height_px, opt);
   FixedVector<Feature> features;
   features.reserve_once(opt.max_features);
+  ImageF gray, inverse_depth;
+  gray.allocate(p.camera.width_px, p.camera.height_px);
+  inverse_depth.allocate(p.camera.width_px, p.camera.height_px);
   for (int i = 0; i < frames.count(); i += every) {
     if (!frames.load(i)) continue;
     const FramePyramid& frame = frames.frame();
-    extractor.extract(frame.gray(0), frame.inverse_depth(0), frame.intrinsics(0), &features);
-    std::vector<Descriptor> image;
-    for (const Feature& feature : features) image.push_back(feature.descriptor);
-    if (!image.empty()) images->push_back(std::move(image));
+    for (const Variation v : kVariations) {
+      if (!augment && v != Variation::kAsRecorded) break;
+      vary(frame.gray(0), frame.inverse_depth(0), v, static_cast<uint32_t>(i), &gray,
+           &inverse_depth);
+      extractor.extract(gray, inverse_depth, frame.intrinsics(0), &features);
+      std::vector<Descriptor> image;
+      for (const Feature& feature : features) image.push_back(feature.descriptor);
+      if (!image.empty()) images->push_back(std::move(image));
+    }
   }
   return Status::ok();
 }
@@ -64,7 +133,7 @@ int train(const TrainOptions& o) {
   for (const char* sequence : o.sequences) {
     if (!s.is_ok()) break;
     const size_t before = images.size();
-    s = collect(sequence, p, o.every, &images);
+    s = collect(sequence, p, o.every, o.augment, &images);
     size_t n = 0;
     for (size_t i = before; i < images.size(); ++i) n += images[i].size();
     descriptors += n;
@@ -106,9 +175,10 @@ int train(const TrainOptions& o) {
 
 int vocabulary_command(int argc, char** argv) {
   if (argc < 1 || std::strcmp(argv[0], "train") != 0) {
-    std::fprintf(stderr,
-                 "usage: rgbdtam vocabulary train <sequence-dir>... --config <file> --out <file>\n"
-                 "                                [--every N] [--branching K] [--depth L]\n");
+    std::fprintf(
+        stderr,
+        "usage: rgbdtam vocabulary train <sequence-dir>... --config <file> --out <file>\n"
+        "                                [--every N] [--branching K] [--depth L] [--augment]\n");
     return 2;
   }
   TrainOptions o;
@@ -133,6 +203,8 @@ int vocabulary_command(int argc, char** argv) {
         std::fprintf(stderr, "rgbdtam vocabulary train: --depth needs 1 to 8\n");
         return 2;
       }
+    } else if (std::strcmp(argv[i], "--augment") == 0) {
+      o.augment = true;
     } else if (argv[i][0] == '-') {
       std::fprintf(stderr, "rgbdtam vocabulary train: unknown argument '%s'\n", argv[i]);
       return 2;

@@ -8,8 +8,6 @@
 
 namespace rgbdtam {
 namespace {
-// Paper: the geometric error uses every pixel at 80x60 and one in 2, 3, 4 at the finer levels.
-constexpr int kGeometricStep[kPyramidLevels] = {4, 3, 2, 1};  // finest first
 constexpr int kBorderPx = 2;
 constexpr int kHistogramBins = 1024;
 
@@ -32,7 +30,7 @@ int points_capacity(const TrackerOptions& opt, const PinholeIntrinsics& k, int l
     case GeometricSampling::kSemiDense:
       return opt.residuals.geometric == GeometricMode::kOff ? 0 : photometric_cap(opt, level);
     case GeometricSampling::kSubsampled: {
-      const int s = kGeometricStep[level];
+      const int s = opt.geometric_step[level];
       return ((w + s - 1) / s) * ((h + s - 1) / s);
     }
     case GeometricSampling::kDense:
@@ -204,7 +202,7 @@ void KeyframeBuilder::select_geometric(const FramePyramid& frame, int level, Tra
   const PinholeIntrinsics& k = frame.intrinsics(level);
   const int w = idepth.width(), h = idepth.height();
   const GeometricSampling sampling = opt_.residuals.sampling;
-  const int step = sampling == GeometricSampling::kSubsampled ? kGeometricStep[level] : 1;
+  const int step = sampling == GeometricSampling::kSubsampled ? opt_.geometric_step[level] : 1;
   auto candidate = [&](int x, int y) {
     const float rho = idepth.at(x, y);
     if (rho <= 0.f || idepth.at(x - 1, y) <= 0.f || idepth.at(x + 1, y) <= 0.f ||

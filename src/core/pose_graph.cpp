@@ -5,6 +5,24 @@
 #include <cmath>
 
 namespace rgbdtam {
+
+Matrix6d graph_information(const Matrix6d& tracker_information, const SE3& T_k_c) {
+  // T_k_c exp(xi) = exp(delta) T_k_c with xi = Ad(T_c_k) delta.
+  const Matrix6d A = adjoint(T_k_c);
+  return A.transpose() * tracker_information * A;
+}
+
+Matrix6d information_through(const Matrix6d& info_a_f, const Matrix6d& info_b_f, const SE3& T_b_f) {
+  // T_a_f exp(xa) (T_b_f exp(xb))^-1 = T_a_b exp(Ad(T_b_f) (xa - xb)).
+  const Matrix6d I = Matrix6d::Identity();
+  // A tiny ridge: a direction one measurement leaves free is free in the result too.
+  constexpr double kRidge = 1e-9;
+  const Matrix6d cov =
+      (info_a_f + kRidge * I).ldlt().solve(I) + (info_b_f + kRidge * I).ldlt().solve(I);
+  const Matrix6d A = adjoint(T_b_f.inverse());
+  return A.transpose() * cov.ldlt().solve(I) * A;
+}
+
 void PoseGraph::allocate(int max_nodes, int max_edges) {
   RGBDTAM_ASSERT(max_nodes > 0 && max_edges > 0, "empty pose graph");
   max_nodes_ = max_nodes;

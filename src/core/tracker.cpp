@@ -341,10 +341,12 @@ Tracker::LevelCost Tracker::measure(const TrackPoints& ph, const TrackPoints& ge
 void Tracker::add_normal_equations_of(const TrackPoints& ph, const TrackPoints& geo, LevelCost* c) {
   // The rows measure() weighed for this evaluation: the scratch buffers hold it.
   c->H.setZero();
+  c->H_geometric.setZero();
   c->g.setZero();
   add_normal_equations(ph, row_weight_[0].get(), row_residual_[0].get(), 1.0, &c->H, &c->g);
   add_normal_equations(geo, row_weight_[1].get(), row_residual_[1].get(), opt_.geometric_weight,
-                       &c->H, &c->g);
+                       &c->H_geometric, &c->g);
+  c->H += c->H_geometric;
   c->has_normal_equations = true;
 }
 
@@ -445,6 +447,7 @@ TrackResult Tracker::track(const Keyframe& kf, const FramePyramid& frame, const 
   result.residuals_used = finest.valid;
   result.information = finest.H;
   describe_fit(kf, frame, T_c_k, reference.photometric[0], &result);
+  describe_depth_degeneracy(geometric_points(kf, frame, 0), finest.H_geometric, &result);
   // Too few residuals left to constrain six degrees of freedom reliably.
   constexpr int kMinResiduals = 100;
   result.state = finest.valid >= kMinResiduals ? TrackingState::kOk : TrackingState::kLost;
@@ -551,6 +554,37 @@ void Tracker::describe_fit(const Keyframe& kf, const FramePyramid& frame, const 
   motion_stats(kf, frame, T_c_k, &out->visible, &out->parallax);
   out->overlap = out->visible * ((out->terms & kPhotometricTerm) != 0 ? out->photometric_inliers
                                                                       : out->geometric_inliers);
+}
+
+void Tracker::describe_depth_degeneracy(const TrackPoints& geo,
+                                        const Eigen::Matrix<double, 6, 6>& H_geo,
+                                        TrackResult* out) {
+  // Real scenes give the depth term a condition number of 100-300 in these units (fr1_xyz,
+  // fr3_teddy); plain planes, 6e4 and more (a corridor: its axis; a wall: three directions).
+  constexpr double kDegenerate = 1e-4;
+  constexpr int kStride = 8;  // the median depth of a sample
+  out->depth_degenerate = false;
+  out->weak_direction_std_m = 0.0;
+  out->weak_direction.setZero();
+  int n = 0;
+  for (int i = 0; i < geo.size(); i += kStride) scratch_[n++] = geo.z()[i];
+  if ((out->terms & kGeometricTerm) == 0 || n == 0 || !(H_geo.trace() > 0.0)) return;
+  std::nth_element(scratch_.get(), scratch_.get() + n / 2, scratch_.get() + n);
+  const double depth = scratch_[n / 2];
+  // Translation in scene depths, so that a shift and a turn that move the scene alike count
+  // alike.
+  Vector6d s;
+  s << depth, depth, depth, 1.0, 1.0, 1.0;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> geometric(
+      s.asDiagonal() * H_geo * s.asDiagonal());
+  const Vector6d& e = geometric.eigenvalues();
+  const Vector6d u = geometric.eigenvectors().col(0);
+  out->weak_direction = s.asDiagonal() * u / depth;
+  if (!(e(0) < kDegenerate * e(5))) return;
+  out->depth_degenerate = true;
+  const double information = u.dot(s.asDiagonal() * out->information * s.asDiagonal() * u);
+  out->weak_direction_std_m =
+      information > 0.0 ? depth / std::sqrt(information) : std::numeric_limits<double>::infinity();
 }
 
 void Tracker::motion_stats(const Keyframe& kf, const FramePyramid& frame, const SE3& T_c_k,

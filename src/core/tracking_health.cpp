@@ -35,6 +35,10 @@ uint32_t failed_health_checks(const TrackResult& r, const HealthContext& context
       !(r.rotation_std_rad <= limits.max_rotation_std_rad)) {
     failed |= kIllConditioned;
   }
+  if (r.depth_degenerate && !(std::sqrt(limits.covariance_scale) * r.weak_direction_std_m <=
+                              limits.max_weak_direction_std_m)) {
+    failed |= kWeakDirection;
+  }
   if (context.dt_s > 0.0) {
     if (!within_motion_limits(context.T_last_current, context.dt_s, limits)) {
       failed |= kTooFast;
@@ -52,7 +56,8 @@ void describe_health(uint32_t failed, char* buf, int size) {
     const char* name;
   } kNames[] = {{kFewResiduals, "few residuals"},       {kPhotometricMisfit, "photometric misfit"},
                 {kGeometricMisfit, "geometric misfit"}, {kCostAboveTypical, "cost above typical"},
-                {kIllConditioned, "ill-conditioned"},   {kTooFast, "too fast"}};
+                {kIllConditioned, "ill-conditioned"},   {kTooFast, "too fast"},
+                {kWeakDirection, "weak direction"}};
   if (size <= 0) return;
   if (failed == 0) {
     std::snprintf(buf, static_cast<size_t>(size), "healthy");

@@ -2,47 +2,63 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
+#include <cstring>
 
 namespace rgbdtam {
 namespace {
-constexpr int kCandidates = 3;             // best-scoring places verified per query
-constexpr double kMinRelativeScore = 0.5;  // ... when within this fraction of the best score
-constexpr int kConsistentOrderGap = 4;     // "the same place": records this close in the store
 constexpr int kGaussNewtonSteps = 10;
+// Edges the graph keeps per place: its measurement, and on average a few verified alignments.
+constexpr int kEdgesPerPlace = 4;
+// Places this few edges away are the keyframe's covisible neighbourhood: odometry and the
+// neighbours' edges already tie them to it, so a revisit is a place the graph reaches only
+// through a longer path (along which drift accumulates), or not at all.
+constexpr int kCovisibleHops = 3;
+// A place the map puts this near the keyframe may show the same scene (direct alignment then
+// decides): the views of pairs further apart rarely overlap by half.
+constexpr double kNearM = 0.4;
+constexpr double kNearRad = 30.0 * M_PI / 180.0;
+constexpr double kMetresPerRadian = 0.3;  // for ranking by distance, as the tracker's reuse
 // A relation the map does not know (a restart's jump): in the graph for connectedness only.
 constexpr double kUnknownRelationInformation = 1e-6;
-// Spread of the matched points about their centroid, for the loop edge's rotation, m.
-constexpr double kMatchSpreadM = 0.5;
-constexpr double kMinMatchRmsM = 0.01;
 
-struct CandidateFilter {
-  const PlaceStore* store;
-  uint32_t segment;
-  int64_t timestamp_ns;
-  int64_t min_age_ns;
+struct QueryFilter {
+  const int* hops;
 };
 
-bool is_loop_candidate(const void* context, int slot) {
-  const auto* f = static_cast<const CandidateFilter*>(context);
-  const PlaceRecord& r = f->store->at_slot(slot);
-  return r.segment != f->segment || f->timestamp_ns - r.timestamp_ns >= f->min_age_ns;
+bool outside_neighbourhood(const void* context, int slot) {
+  const int h = static_cast<const QueryFilter*>(context)->hops[slot];
+  return h < 0 || h > kCovisibleHops;
 }
 
-// The tracker's information of a keyframe's pose relative to its reference, moved from the
-// reference side (how the tracker perturbs) to the keyframe side (how the graph perturbs).
-Matrix6d edge_information(const PlaceRecord& r, const SE3& T_ref_k) {
-  if (r.information.isZero()) return kUnknownRelationInformation * Matrix6d::Identity();
-  const Matrix6d A = adjoint(T_ref_k);
-  return A.transpose() * r.information * A;
+double pose_distance(const SE3& d) {
+  return d.translation().norm() + kMetresPerRadian * so3_log(d.quaternion()).norm();
 }
 }  // namespace
 
-void LoopQueue::allocate(int slots, int width, int height) {
+const char* edge_kind_name(EdgeKind kind) {
+  switch (kind) {
+    case EdgeKind::kOdometry:
+      return "odometry";
+    case EdgeKind::kRestart:
+      return "restart";
+    case EdgeKind::kRelocalisation:
+      return "relocalisation";
+    case EdgeKind::kCovisible:
+      return "covisible";
+    case EdgeKind::kRevisit:
+      return "revisit";
+    case EdgeKind::kReuse:
+      return "reuse";
+  }
+  return "?";
+}
+
+void LoopQueue::allocate(int slots, const PinholeIntrinsics& camera) {
   SpscRing<LoopKeyframe>::allocate(slots);
   for (int i = 0; i < slots; ++i) {
-    slot(i).gray.allocate(width, height);
-    slot(i).inverse_depth.allocate(width, height);
+    slot(i).gray.allocate(camera.width_px, camera.height_px);
+    slot(i).inverse_depth.allocate(camera.width_px, camera.height_px);
+    slot(i).view.allocate(camera);
   }
 }
 
@@ -51,21 +67,47 @@ void CorrectionQueue::allocate(int slots, int places) {
   for (int i = 0; i < slots; ++i) slot(i).poses.reserve_once(places);
 }
 
+size_t LoopModule::bytes_needed(const Params& p) {
+  const size_t places = static_cast<size_t>(p.loop.places);
+  const size_t edges = places * kEdgesPerPlace;
+  constexpr size_t kGraphBytesPerNode = 3 * sizeof(Matrix6d) + 6 * sizeof(Vector6d) + sizeof(SE3);
+  constexpr size_t kGraphBytesPerEdge = 2 * sizeof(Matrix6d) + sizeof(SE3) + 16;
+  return places * (kGraphBytesPerNode + 5 * sizeof(int)) +
+         edges * (sizeof(Edge) + kGraphBytesPerEdge + 2 * sizeof(int)) +
+         ViewAligner::bytes_needed(p.camera, tracking_options(p));
+}
+
 Status LoopModule::init(const Params& params, const Vocabulary* vocabulary, PlaceStore* store,
                         CorrectionQueue* corrections, ClockFn clock) {
   params_ = params;
+  params_.health = health_limits(params);
   vocabulary_ = vocabulary;
   store_ = store;
   corrections_ = corrections;
   clock_ = clock;
   recognizer_.allocate(params);
   limits_ = VerificationLimits::of(params);
-  graph_.allocate(params.loop.places, 2 * params.loop.places);
-  loops_.reserve_once(params.loop.places);
+  aligner_.allocate(params.camera, params.sensor.depth_factor, params.sensor.depth_range,
+                    tracking_options(params));
+  const int places = params.loop.places;
+  const int edges = places * kEdgesPerPlace;
+  graph_.allocate(places, edges);
+  edges_.reserve_once(edges);
+  for (auto* a : {&hops_, &queue_, &node_of_slot_}) a->reset(new int[static_cast<size_t>(places)]);
+  first_neighbour_.reset(new int[static_cast<size_t>(places) + 1]);
+  neighbours_.reset(new int[2 * static_cast<size_t>(edges)]);
   return Status::ok();
 }
 
-void LoopModule::step(const LoopKeyframe& keyframe) {
+void LoopModule::step(const LoopKeyframe& message) {
+  if (message.kind == LoopKeyframe::Kind::kReuse) {
+    add_reuse(message);
+  } else {
+    add_keyframe(message);
+  }
+}
+
+void LoopModule::add_keyframe(const LoopKeyframe& keyframe) {
   const int64_t t0 = clock_();
   // A keyframe made before the tracker adopted the last correction is in the old frame.
   SE3 T_w_k = keyframe.T_w_k;
@@ -73,143 +115,231 @@ void LoopModule::step(const LoopKeyframe& keyframe) {
   recognizer_.describe(keyframe.gray, keyframe.inverse_depth, params_.camera, *vocabulary_);
   const int64_t t1 = clock_();
   describe_time_.add(t1 - t0);
-  segment_ += keyframe.after_reset ? 1 : 0;
-  Found found;
-  const bool loop = detect(keyframe, &found);
-  query_time_.add(clock_() - t1);
   remember(keyframe, T_w_k);
-  if (loop) close_loop(found, keyframe.keyframe_id);
+  const int query = store_->size() - 1;
+  const PlaceHandle query_handle = store_->handle(query);
+  // The tracker's own measurement; a keyframe whose reference the map does not hold (forgotten,
+  // or left out at a full queue) hangs on its predecessor with no information, for connectedness.
+  int reference = store_->order_of(keyframe.reference_id);
+  EdgeKind measured = keyframe.reference_edge;
+  if (reference < 0 || reference == query) {
+    reference = query - 1;
+    measured = EdgeKind::kRestart;
+  }
+  bool correct = false;
+  if (reference >= 0) {
+    const bool known = measured != EdgeKind::kRestart;
+    const SE3 T_ref_k =
+        known ? keyframe.T_reference_keyframe : store_->in_order(reference).T_w_k.inverse() * T_w_k;
+    correct |=
+        add_edge({store_->handle(reference), query_handle, T_ref_k,
+                  known ? keyframe.information : kUnknownRelationInformation * Matrix6d::Identity(),
+                  measured});
+  }
+  measure_hops(query_handle.slot);
+  PlaceCandidate candidates[CandidateBudget::kTotal];
+  const int n = choose_candidates(query_handle.slot, candidates);
+  aligner_.set(1, keyframe.view);
+  for (int i = 0; i < n; ++i) {
+    ++counters_.candidates;
+    aligner_.set(0, store_->at_slot(candidates[i].slot).view);
+    const ViewAlignment a =
+        aligner_.align(candidates[i].guesses, candidates[i].guess_count, params_.health);
+    if (!measures_pose(a)) continue;
+    const Matrix6d information =
+        graph_information(a.forward.information / params_.covariance_scale, a.T_a_b);
+    const PlaceHandle place{candidates[i].slot, store_->at_slot(candidates[i].slot).generation};
+    const bool disagrees =
+        add_edge({place, query_handle, a.T_a_b, information, candidates[i].kind});
+    // A neighbour's edge refines the map at the next optimisation; a revisit corrects it.
+    correct |= disagrees && candidates[i].kind == EdgeKind::kRevisit;
+    ++(candidates[i].kind == EdgeKind::kRevisit ? counters_.revisit_edges
+                                                : counters_.covisible_edges);
+  }
+  search_time_.add(clock_() - t1);
+  if (correct) optimise();
 }
 
-bool LoopModule::detect(const LoopKeyframe& query, Found* found) {
-  const CandidateFilter filter{store_, segment_, query.timestamp_ns,
-                               static_cast<int64_t>(params_.loop.min_age_s * 1e9)};
-  PlaceMatch matches[kCandidates];
-  PlaceMatchEvent events[kCandidates];
-  int verified = 0;
-  int n = 0;
-  {
-    // A query uses the database's scratch, which a relocalising tracker uses too. The records
-    // themselves only this thread writes, so it reads them without the lock.
-    std::lock_guard<std::mutex> lock(store_->mutex());
-    n = store_->database().query(recognizer_.bow(), is_loop_candidate, &filter, matches,
-                                 kCandidates);
+void LoopModule::add_reuse(const LoopKeyframe& message) {
+  const int from = store_->order_of(message.reference_id);
+  const int to = store_->order_of(message.keyframe_id);
+  if (from < 0 || to < 0 || from == to) return;
+  ++counters_.reuse_edges;
+  if (add_edge({store_->handle(from), store_->handle(to), message.T_reference_keyframe,
+                message.information, EdgeKind::kReuse})) {
+    optimise();
   }
-  for (int i = 0; i < n && matches[i].score >= kMinRelativeScore * matches[0].score; ++i) {
-    const PlaceRecord& place = store_->at_slot(matches[i].slot);
-    ++counters_.candidates;
-    const RigidRansacResult fit = recognizer_.verify(place, limits_);
-    if (fit.inliers == 0) continue;
-    events[verified++] = {query.keyframe_id,
-                          place.keyframe_id,
-                          query.timestamp_ns,
-                          place.timestamp_ns,
-                          fit.T_b_a,
-                          fit.inliers,
-                          false};
-    if (verified > 1 && fit.inliers <= found->fit.inliers) continue;
-    found->place = {matches[i].slot, place.generation};
-    found->keyframe_id = place.keyframe_id;
-    found->T_place_query = fit.T_b_a;
-    found->fit = fit;
-  }
-  bool loop = false;
-  if (verified == 0) {
-    consistent_ = 0;
-  } else {
-    ++counters_.verified;
-    const int order = store_->order_of(found->keyframe_id);
-    const int last = store_->order_of(last_match_id_);
-    const bool same_place =
-        consistent_ > 0 && last >= 0 && std::abs(order - last) <= kConsistentOrderGap;
-    consistent_ = same_place ? consistent_ + 1 : 1;
-    last_match_id_ = found->keyframe_id;
-    loop = consistent_ >= params_.loop.consistent_queries;
-  }
-  for (int i = 0; observer_ != nullptr && i < verified; ++i) {
-    events[i].loop = loop && events[i].place_id == found->keyframe_id;
-    observer_->on_verified(events[i]);
-  }
-  return loop;
 }
 
 void LoopModule::remember(const LoopKeyframe& keyframe, const SE3& T_w_k) {
   std::lock_guard<std::mutex> lock(store_->mutex());
   PlaceRecord* r = store_->begin_insert();
   r->keyframe_id = keyframe.keyframe_id;
-  r->segment = segment_;
   r->timestamp_ns = keyframe.timestamp_ns;
   r->T_w_k = T_w_k;
-  r->reference_id = keyframe.reference_id;
-  r->after_reset = keyframe.after_reset;
-  r->information = keyframe.information;
   for (const Feature& f : recognizer_.features()) (void)r->features.push_back(f);
   for (const BowEntry& e : recognizer_.bow()) (void)r->bow.push_back(e);
+  std::memcpy(r->view.gray.data(), keyframe.view.gray.data(), keyframe.view.gray.size());
+  std::memcpy(r->view.inverse_depth.data(), keyframe.view.inverse_depth.data(),
+              sizeof(uint16_t) * static_cast<size_t>(keyframe.view.inverse_depth.size()));
   store_->commit();
   ++counters_.keyframes;
 }
 
-void LoopModule::close_loop(const Found& found, uint32_t query_id) {
-  const PlaceRecord* place = store_->get(found.place);
-  if (place == nullptr) return;  // evicted by the insertion just made
-  const PlaceHandle query = store_->handle(store_->size() - 1);
-  const PlaceRecord& q = store_->in_order(store_->size() - 1);
-  if (loops_.size() == loops_.capacity()) {
-    // Full: forget the loops whose places are gone.
+bool LoopModule::add_edge(const Edge& edge) {
+  if (edges_.size() == edges_.capacity()) {
+    // Full: forget the edges of forgotten places.
     int kept = 0;
-    for (const LoopEdge& e : loops_) {
-      if (store_->get(e.from) != nullptr && store_->get(e.to) != nullptr) loops_[kept++] = e;
+    for (const Edge& e : edges_) {
+      if (store_->get(e.from) != nullptr && store_->get(e.to) != nullptr) edges_[kept++] = e;
     }
-    loops_.truncate(kept);
+    edges_.truncate(kept);
   }
-  const double n = found.fit.inliers;
-  const double rms = std::max(found.fit.rms_m, kMinMatchRmsM);
-  Matrix6d information = Matrix6d::Zero();
-  information.diagonal().head<3>().setConstant(n / (rms * rms));
-  information.diagonal().tail<3>().setConstant(n * kMatchSpreadM * kMatchSpreadM / (rms * rms));
-  if (!loops_.push_back({found.place, query, found.T_place_query, information})) return;
-  ++counters_.loops;
-  const SE3 disagreement = (place->T_w_k * found.T_place_query).inverse() * q.T_w_k;
-  if (disagreement.translation().norm() < params_.loop.min_correction_m &&
-      so3_log(disagreement.quaternion()).norm() < params_.loop.min_correction_rad) {
-    return;
+  if (!edges_.push_back(edge)) {
+    ++counters_.edges_dropped;
+    return false;
   }
-  optimise(query_id, found.keyframe_id);
+  const PlaceRecord* from = store_->get(edge.from);
+  const PlaceRecord* to = store_->get(edge.to);
+  if (observer_ != nullptr) {
+    observer_->on_edge({from->keyframe_id, to->keyframe_id, edge.T_from_to, edge.kind});
+  }
+  if (edge.kind == EdgeKind::kRestart) return false;
+  const SE3 disagreement = (from->T_w_k * edge.T_from_to).inverse() * to->T_w_k;
+  return disagreement.translation().norm() > params_.loop.min_correction_m ||
+         so3_log(disagreement.quaternion()).norm() > params_.loop.min_correction_rad;
 }
 
-void LoopModule::optimise(uint32_t query_id, uint32_t match_id) {
+void LoopModule::measure_hops(int slot) {
+  const int places = store_->capacity();
+  int* degree = hops_.get();  // reused as the fill cursor before the search
+  std::fill(degree, degree + places, 0);
+  auto usable = [&](const Edge& e) {
+    return e.kind != EdgeKind::kRestart && store_->get(e.from) != nullptr &&
+           store_->get(e.to) != nullptr;
+  };
+  for (const Edge& e : edges_) {
+    if (!usable(e)) continue;
+    ++degree[e.from.slot];
+    ++degree[e.to.slot];
+  }
+  first_neighbour_[0] = 0;
+  for (int i = 0; i < places; ++i) first_neighbour_[i + 1] = first_neighbour_[i] + degree[i];
+  for (int i = 0; i < places; ++i) degree[i] = first_neighbour_[i];
+  for (const Edge& e : edges_) {
+    if (!usable(e)) continue;
+    neighbours_[degree[e.from.slot]++] = e.to.slot;
+    neighbours_[degree[e.to.slot]++] = e.from.slot;
+  }
+  std::fill(hops_.get(), hops_.get() + places, -1);
+  int head = 0, tail = 0;
+  hops_[slot] = 0;
+  queue_[tail++] = slot;
+  while (head < tail) {
+    const int s = queue_[head++];
+    for (int k = first_neighbour_[s]; k < first_neighbour_[s + 1]; ++k) {
+      const int t = neighbours_[k];
+      if (hops_[t] >= 0) continue;
+      hops_[t] = hops_[s] + 1;
+      queue_[tail++] = t;
+    }
+  }
+}
+
+int LoopModule::choose_candidates(int query_slot, PlaceCandidate* out) {
+  const PlaceRecord& q = store_->at_slot(query_slot);
+  const SE3 T_q_w = q.T_w_k.inverse();
+  // By geometry: the nearest covisible place that is not yet a neighbour, and the revisits the
+  // graph joins through the longest paths.
+  struct Ranked {
+    int slot = -1;
+    int hops = 0;
+    double distance = 0.0;
+  };
+  Ranked covisible;
+  Ranked revisits[CandidateBudget::kGeometric];
+  int revisit_count = 0;
+  for (int i = 0; i < store_->size(); ++i) {
+    const int slot = store_->handle(i).slot;
+    // A place the graph does not join (before a restart, which began at the last valid pose,
+    // so the map's guess still holds roughly) is the longest loop of all.
+    const Ranked r{slot, hops_[slot] < 0 ? store_->capacity() : hops_[slot],
+                   pose_distance(T_q_w * store_->at_slot(slot).T_w_k)};
+    if (r.hops < 2) continue;  // itself and its neighbours
+    const SE3 d = T_q_w * store_->at_slot(slot).T_w_k;
+    if (d.translation().norm() > kNearM || so3_log(d.quaternion()).norm() > kNearRad) continue;
+    if (r.hops <= kCovisibleHops) {
+      if (covisible.slot < 0 || r.distance < covisible.distance) covisible = r;
+      continue;
+    }
+    // Kept sorted: the most hops first, then the nearest.
+    auto before = [](const Ranked& a, const Ranked& b) {
+      return a.hops != b.hops ? a.hops > b.hops : a.distance < b.distance;
+    };
+    int at = revisit_count;
+    while (at > 0 && before(r, revisits[at - 1])) --at;
+    if (at == CandidateBudget::kGeometric) continue;
+    revisit_count = std::min(revisit_count + 1, CandidateBudget::kGeometric);
+    for (int k = revisit_count - 1; k > at; --k) revisits[k] = revisits[k - 1];
+    revisits[at] = r;
+  }
+  int n = 0;
+  auto map_guess = [&](int slot) { return store_->at_slot(slot).T_w_k.inverse() * q.T_w_k; };
+  auto add = [&](int slot, EdgeKind kind) {
+    PlaceCandidate& c = out[n++];
+    c = PlaceCandidate();
+    c.slot = slot;
+    c.kind = kind;
+    c.add_guess(map_guess(slot));
+    return &c;
+  };
+  if (covisible.slot >= 0) add(covisible.slot, EdgeKind::kCovisible);
+  for (int i = 0; i < revisit_count; ++i) {
+    add(revisits[i].slot, EdgeKind::kRevisit)->add_guess(SE3());  // or where the place was seen
+  }
+  // By appearance, outside the neighbourhood: the features' fit is the first guess, then the
+  // map's, then the place's own pose.
+  const int first = n;
+  {
+    std::lock_guard<std::mutex> lock(store_->mutex());
+    const QueryFilter filter{hops_.get()};
+    n = recognizer_.add_appearance_candidates(*store_, outside_neighbourhood, &filter,
+                                              CandidateBudget::kAppearance, limits_, out, n);
+  }
+  for (int i = first; i < n; ++i) {
+    out[i].add_guess(map_guess(out[i].slot));
+    out[i].add_guess(SE3());
+  }
+  return n;
+}
+
+void LoopModule::optimise() {
   const int64_t t0 = clock_();
   graph_.clear();
   const int n = store_->size();
-  for (int i = 0; i < n; ++i) (void)graph_.add_node(store_->in_order(i).T_w_k);
-  for (int i = 1; i < n; ++i) {
-    const PlaceRecord& r = store_->in_order(i);
-    const int ref = r.after_reset ? -1 : store_->order_of(r.reference_id);
-    const int from = ref >= 0 && ref != i ? ref : i - 1;
-    const SE3 T_from_k = store_->in_order(from).T_w_k.inverse() * r.T_w_k;
-    const Matrix6d information = r.after_reset ? kUnknownRelationInformation * Matrix6d::Identity()
-                                               : edge_information(r, T_from_k);
-    (void)graph_.add_edge(from, i, T_from_k, information);
+  for (int i = 0; i < n; ++i) {
+    node_of_slot_[store_->handle(i).slot] = graph_.add_node(store_->in_order(i).T_w_k);
   }
-  auto order_of_handle = [&](const PlaceHandle& h) {
-    const PlaceRecord* r = store_->get(h);
-    return r == nullptr ? -1 : store_->order_of(r->keyframe_id);
-  };
-  for (const LoopEdge& e : loops_) {
-    const int from = order_of_handle(e.from), to = order_of_handle(e.to);
-    if (from >= 0 && to >= 0 && from != to)
-      (void)graph_.add_edge(from, to, e.T_from_to, e.information);
+  for (const Edge& e : edges_) {
+    if (store_->get(e.from) == nullptr || store_->get(e.to) == nullptr) continue;
+    (void)graph_.add_edge(node_of_slot_[e.from.slot], node_of_slot_[e.to.slot], e.T_from_to,
+                          e.information);
   }
   (void)graph_.optimize(kGaussNewtonSteps);
-  LoopCorrection* out = corrections_->begin_push();
+  // Sent only when it moves the map: each correction resets the consumers' estimate.
+  bool moved = false;
+  for (int i = 0; i < n && !moved; ++i) {
+    const SE3 d = store_->in_order(i).T_w_k.inverse() * graph_.pose(i);
+    moved = d.translation().norm() > params_.loop.min_correction_m ||
+            so3_log(d.quaternion()).norm() > params_.loop.min_correction_rad;
+  }
+  LoopCorrection* out = moved ? corrections_->begin_push() : nullptr;
+  if (moved && out == nullptr)
+    ++counters_.corrections_dropped;  // the map stays as the tracker knows it
   if (out == nullptr) {
-    // The tracker has not taken the last one: the map stays as the tracker knows it.
-    ++counters_.corrections_dropped;
     optimise_time_.add(clock_() - t0);
     return;
   }
-  out->query_id = query_id;
-  out->match_id = match_id;
   out->poses.clear();
   {
     std::lock_guard<std::mutex> lock(store_->mutex());

@@ -143,17 +143,14 @@ const KeySpec kSpecs[] = {
     {"loop.queue_keyframes", ValueType::kInt, 1, 64, "",
      "tracker-to-loop queue slots; a full queue leaves the keyframe out of the map",
      RGBDTAM_FIELD(loop.queue_keyframes), false},
-    {"loop.min_age", ValueType::kReal, 0, 1e6, "s",
-     "a place of the same unbroken stretch is a loop candidate only this long after",
-     RGBDTAM_FIELD(loop.min_age_s), false},
+    // loop.min_age: gone; candidates are excluded by the graph's neighbourhood, not by age.
     {"loop.min_inliers", ValueType::kInt, 6, 4000, "",
-     "3-D feature matches one rigid motion must explain to accept a place",
+     "3-D feature matches one rigid motion must explain to give a first guess of a place's pose",
      RGBDTAM_FIELD(loop.min_inliers), false},
-    {"loop.consistent_queries", ValueType::kInt, 1, 10, "",
-     "consecutive keyframes that must find the same place before a loop is closed",
-     RGBDTAM_FIELD(loop.consistent_queries), false},
+    // loop.consistent_queries: gone; each revisit is verified by aligning the views both ways.
     {"loop.min_correction", ValueType::kReal, 0, 10, "m",
-     "a verified loop moves the map only beyond this disagreement",
+     "a revisit optimises the map when it disagrees with it beyond this, and a correction is "
+     "sent when the map moved further",
      RGBDTAM_FIELD(loop.min_correction_m), false},
     {"loop.min_correction_angle", ValueType::kDegreesAsRadians, 0, 180, "deg",
      "... or beyond this angle", RGBDTAM_FIELD(loop.min_correction_rad), false},
@@ -182,6 +179,9 @@ const KeySpec kSpecs[] = {
     {"health.max_rotation_std", ValueType::kDegreesAsRadians, 1e-4, 180, "deg",
      "lost when the rotation's 1-sigma exceeds this about some axis",
      RGBDTAM_FIELD(health.max_rotation_std_rad), false},
+    {"health.max_weak_direction_std", ValueType::kReal, 1e-6, 100, "m",
+     "lost when a direction the depth leaves free has a reported 1-sigma above this",
+     RGBDTAM_FIELD(health.max_weak_direction_std_m), false},
     {"health.max_speed", ValueType::kReal, 0.01, 1000, "m/s",
      "lost when the camera moved faster than this since the last valid pose",
      RGBDTAM_FIELD(health.max_speed_m_s), false},
@@ -243,6 +243,19 @@ Status resolve_beside(const char* source, const char* key, char* path, size_t si
   return Status::ok();
 }
 }  // namespace
+
+TrackerOptions tracking_options(const Params& p) {
+  TrackerOptions o = p.tracker;
+  o.inverse_depth_sigma = p.sensor.inverse_depth_sigma();
+  o.inverse_depth_sigma_floor = p.sensor.inverse_depth_quantum_sigma();
+  return o;
+}
+
+HealthLimits health_limits(const Params& p) {
+  HealthLimits h = p.health;
+  h.covariance_scale = p.covariance_scale;
+  return h;
+}
 
 Status parse_params(const char* text, const char* source, Params* out) {
   Params p = *out;

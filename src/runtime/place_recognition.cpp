@@ -1,22 +1,28 @@
 #include "rgbdtam/runtime/place_recognition.hpp"
 
 #include <algorithm>
+#include <cstring>
 
 namespace rgbdtam {
 
-void PlaceStore::allocate(int capacity, int features_per_place, int words) {
+void PlaceStore::allocate(int capacity, int features_per_place, int words,
+                          const PinholeIntrinsics& camera) {
   capacity_ = capacity;
   records_.reset(new PlaceRecord[static_cast<size_t>(capacity)]);
   for (int i = 0; i < capacity; ++i) {
     records_[i].features.reserve_once(features_per_place);
     records_[i].bow.reserve_once(features_per_place);
+    records_[i].view.allocate(camera);
   }
   database_.allocate(capacity, words, features_per_place);
 }
 
-size_t PlaceStore::bytes_needed(int capacity, int features_per_place, int words) {
-  const size_t per_place = sizeof(PlaceRecord) + static_cast<size_t>(features_per_place) *
-                                                     (sizeof(Feature) + sizeof(BowEntry));
+size_t PlaceStore::bytes_needed(int capacity, int features_per_place, int words,
+                                const PinholeIntrinsics& camera) {
+  const size_t per_place =
+      sizeof(PlaceRecord) +
+      static_cast<size_t>(features_per_place) * (sizeof(Feature) + sizeof(BowEntry)) +
+      View::bytes(camera);
   // The database: an entry per word of every place, and per-word list heads and scores.
   const size_t index = static_cast<size_t>(capacity) * features_per_place * 16 +
                        static_cast<size_t>(words) * 4 + static_cast<size_t>(capacity) * 12;
@@ -73,6 +79,16 @@ const PlaceRecord* PlaceStore::get(const PlaceHandle& h) const {
   return &records_[h.slot];
 }
 
+size_t PlaceRecognizer::bytes_needed(const Params& params) {
+  // The extractor's images (3 float images and a corner list per pixel), and per feature the
+  // feature, its word, a match and its inlier flag.
+  constexpr size_t kFeatureBytesPerPixel = 3 * sizeof(float) + 2;
+  const size_t pixels = static_cast<size_t>(params.camera.width_px) * params.camera.height_px;
+  return pixels * kFeatureBytesPerPixel +
+         static_cast<size_t>(params.loop.features) *
+             (sizeof(Feature) + sizeof(BowEntry) + sizeof(PointPair) + 1);
+}
+
 void PlaceRecognizer::allocate(const Params& params) {
   FeatureOptions opt;
   opt.max_features = params.loop.features;
@@ -99,6 +115,28 @@ RigidRansacResult PlaceRecognizer::verify(const FixedVector<Feature>& query,
   RigidRansacResult r = rigid_ransac(pairs_.get(), n, opt, inlier_.get());
   if (r.inliers < limits.min_inliers) r.inliers = 0;
   return r;
+}
+
+int PlaceRecognizer::add_appearance_candidates(PlaceStore& store, PlaceDatabase::Filter allowed,
+                                               const void* context, int max,
+                                               const VerificationLimits& limits,
+                                               PlaceCandidate* out, int n) {
+  constexpr int kMaxMatches = 8;
+  constexpr float kMinRelativeScore = 0.5f;
+  PlaceMatch matches[kMaxMatches];
+  const int found =
+      store.database().query(bow_, allowed, context, matches, std::min(max, kMaxMatches));
+  for (int i = 0; i < found && matches[i].score >= kMinRelativeScore * matches[0].score; ++i) {
+    bool chosen = false;
+    for (int k = 0; k < n; ++k) chosen |= out[k].slot == matches[i].slot;
+    if (chosen) continue;
+    PlaceCandidate& c = out[n++];
+    c = PlaceCandidate();
+    c.slot = matches[i].slot;
+    const RigidRansacResult fit = verify(store.at_slot(c.slot), limits);
+    if (fit.inliers > 0) c.add_guess(fit.T_b_a);
+  }
+  return n;
 }
 
 }  // namespace rgbdtam

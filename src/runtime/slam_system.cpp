@@ -22,16 +22,15 @@ MemoryNeed memory_need(const Params& p, int vocabulary_words) {
   m.images =
       pixels * (kTrackerImageBytesPerPixel + (p.map_enabled ? kMapperImageBytesPerPixel : 0));
   if (p.loop.enabled && vocabulary_words > 0) {
-    // The features' scratch images (3 float images and a corner list) twice, the keyframe
-    // queue's images, the corrections and the pose graph.
-    constexpr size_t kFeatureBytesPerPixel = 3 * sizeof(float) + 2;
-    constexpr size_t kGraphBytesPerPlace =
-        3 * sizeof(Matrix6d) + 6 * sizeof(Vector6d) + 2 * (sizeof(Matrix6d) * 2 + 64) + 64;
-    const size_t places = static_cast<size_t>(p.loop.places);
-    m.loop = PlaceStore::bytes_needed(p.loop.places, p.loop.features, vocabulary_words) +
-             pixels * (2 * kFeatureBytesPerPixel +
-                       static_cast<size_t>(p.loop.queue_keyframes) * 2 * sizeof(float)) +
-             places * (kGraphBytesPerPlace + 2 * sizeof(KeyframePose));
+    // The places, the loop module (its recogniser, view aligner and graph) and the tracker's
+    // relocaliser, the keyframe queue's images and the corrections.
+    constexpr size_t kQueueBytesPerPixel = 2 * sizeof(float);
+    m.loop = PlaceStore::bytes_needed(p.loop.places, p.loop.features, vocabulary_words, p.camera) +
+             PlaceRecognizer::bytes_needed(p) + LoopModule::bytes_needed(p) +
+             Relocaliser::bytes_needed(p) +
+             static_cast<size_t>(p.loop.queue_keyframes) *
+                 (pixels * kQueueBytesPerPixel + View::bytes(p.camera)) +
+             static_cast<size_t>(p.loop.places) * 2 * sizeof(KeyframePose);
   }
   return m;
 }
@@ -43,10 +42,9 @@ Status SlamSystem::init(const Params& params, ClockFn clock, MapSink* sink,
   loop_on_ = params.loop.enabled && vocabulary != nullptr;
   if (loop_on_) {
     constexpr int kCorrectionSlots = 2;
-    loop_queue_.allocate(params.loop.queue_keyframes, params.camera.width_px,
-                         params.camera.height_px);
+    loop_queue_.allocate(params.loop.queue_keyframes, params.camera);
     corrections_.allocate(kCorrectionSlots, params.loop.places);
-    places_.allocate(params.loop.places, params.loop.features, vocabulary->words());
+    places_.allocate(params.loop.places, params.loop.features, vocabulary->words(), params.camera);
     RGBDTAM_RETURN_IF_ERROR(loop_.init(params, vocabulary, &places_, &corrections_, clock));
     tracking_.connect_loop(&loop_queue_, &corrections_, &places_, vocabulary);
   }

@@ -72,6 +72,7 @@ bool TrackingPipeline::reuse_keyframe(const Attempt& current, int64_t t_ns, Pose
       reused.r.parallax > params_.tracker.keyframe_parallax) {
     return false;
   }
+  offer_reuse_to_loop(current, reused);
   reference_ = best;
   out->T_w_c = reused.T_w_c();
   out->keyframe_id = best->id;
@@ -83,9 +84,8 @@ bool TrackingPipeline::reuse_keyframe(const Attempt& current, int64_t t_ns, Pose
   return true;
 }
 
-void TrackingPipeline::start_keyframe(int64_t timestamp_ns, const SE3& T_w_c, PoseEstimate* out,
-                                      bool after_reset) {
-  const uint32_t reference_id = reference_ != nullptr ? reference_->id : next_keyframe_id_;
+void TrackingPipeline::start_keyframe(int64_t timestamp_ns, const SE3& T_w_c,
+                                      const KeyframeLink& link, PoseEstimate* out) {
   Keyframe* kf = pool_->acquire(reference_);
   // With mapping, the new keyframe starts with the previous one's map where its sensor is
   // blind (the authors' "local map"), until its own multi-view map replaces it.
@@ -97,7 +97,7 @@ void TrackingPipeline::start_keyframe(int64_t timestamp_ns, const SE3& T_w_c, Po
   ++counters_.keyframes;
   out->flags |= kNewKeyframe;
   out->keyframe_id = kf->id;
-  offer_to_loop(*kf, reference_id, *out, after_reset);
+  offer_to_loop(*kf, link);
 }
 
 void TrackingPipeline::adopt_map(Keyframe* kf) {

@@ -14,57 +14,74 @@ void TrackingPipeline::connect_loop(LoopQueue* keyframes, CorrectionQueue* corre
   places_ = places;
   vocabulary_ = vocabulary;
   relocaliser_.allocate(params_);
-  relocalisation_limits_ = VerificationLimits::of(params_);
 }
 
-void TrackingPipeline::offer_to_loop(const Keyframe& kf, uint32_t reference_id,
-                                     const PoseEstimate& pose, bool after_reset) {
+TrackingPipeline::KeyframeLink TrackingPipeline::odometry_link(
+    const SE3& T_w_c, const Matrix6d& tracker_information) const {
+  KeyframeLink link;
+  link.reference_id = reference_->id;
+  link.kind = EdgeKind::kOdometry;
+  link.T_reference_keyframe = reference_->T_w_k.inverse() * T_w_c;
+  link.information = graph_information(tracker_information, link.T_reference_keyframe);
+  return link;
+}
+
+TrackingPipeline::KeyframeLink TrackingPipeline::restart_link() const {
+  KeyframeLink link;
+  link.reference_id = reference_ != nullptr ? reference_->id : next_keyframe_id_;
+  return link;
+}
+
+void TrackingPipeline::offer_to_loop(const Keyframe& kf, const KeyframeLink& link) {
   if (loop_queue_ == nullptr) return;
   LoopKeyframe* slot = loop_queue_->begin_push();
   if (slot == nullptr) {
     ++counters_.loop_dropped_keyframes;
     return;
   }
+  slot->kind = LoopKeyframe::Kind::kKeyframe;
   slot->keyframe_id = kf.id;
-  slot->reference_id = reference_id;
-  slot->after_reset = after_reset;
+  slot->reference_id = link.reference_id;
+  slot->reference_edge = link.kind;
   slot->corrections_adopted = corrections_adopted_;
   slot->timestamp_ns = kf.timestamp_ns;
   slot->T_w_k = kf.T_w_k;
-  slot->information = pose.information;
+  slot->T_reference_keyframe = link.T_reference_keyframe;
+  slot->information = link.information;
   std::memcpy(slot->gray.data(), frame().gray(0).data(), sizeof(float) * slot->gray.size());
   std::memcpy(slot->inverse_depth.data(), frame().inverse_depth(0).data(),
               sizeof(float) * slot->inverse_depth.size());
+  capture_view(frame(), &slot->view);
+  loop_queue_->publish();
+}
+
+void TrackingPipeline::offer_reuse_to_loop(const Attempt& left, const Attempt& taken) {
+  if (loop_queue_ == nullptr) return;
+  LoopKeyframe* slot = loop_queue_->begin_push();
+  if (slot == nullptr) {
+    ++counters_.loop_dropped_keyframes;
+    return;
+  }
+  // The frame was tracked against both: T_left_taken = T_left_c T_taken_c^-1.
+  const SE3& T_left_c = left.r.T_k_c;
+  const SE3& T_taken_c = taken.r.T_k_c;
+  slot->kind = LoopKeyframe::Kind::kReuse;
+  slot->keyframe_id = taken.kf->id;
+  slot->reference_id = left.kf->id;
+  slot->reference_edge = EdgeKind::kReuse;
+  slot->T_reference_keyframe = T_left_c * T_taken_c.inverse();
+  slot->information = information_through(
+      graph_information(left.r.information / params_.covariance_scale, T_left_c),
+      graph_information(taken.r.information / params_.covariance_scale, T_taken_c), T_taken_c);
   loop_queue_->publish();
 }
 
 bool TrackingPipeline::relocalise(const SensorFrame& frame, PoseEstimate* out) {
   if (places_ == nullptr || !params_.loop.relocalise || !this->frame().has_depth()) return false;
-  // More candidates than a loop query verifies: a lost frame has already missed its deadline's
-  // use, and has no second query to be consistent with.
-  constexpr int kCandidates = 8;
-  relocaliser_.describe(this->frame().gray(0), this->frame().inverse_depth(0),
-                        this->frame().intrinsics(0), *vocabulary_);
-  RigidRansacResult best;
-  uint32_t place_id = 0;
-  SE3 T_w_place;
-  {
-    std::lock_guard<std::mutex> lock(places_->mutex());
-    PlaceMatch matches[kCandidates];
-    const int n =
-        places_->database().query(relocaliser_.bow(), nullptr, nullptr, matches, kCandidates);
-    for (int i = 0; i < n; ++i) {
-      const PlaceRecord& place = places_->at_slot(matches[i].slot);
-      const RigidRansacResult fit = relocaliser_.verify(place, relocalisation_limits_);
-      if (fit.inliers > best.inliers) {
-        best = fit;
-        place_id = place.keyframe_id;
-        T_w_place = place.T_w_k;
-      }
-    }
-  }
-  if (best.inliers == 0) return false;
-  const SE3 T_w_c = T_w_place * best.T_b_a;
+  const Relocalisation found =
+      relocaliser_.find(this->frame(), has_last_ ? &T_w_last_ : nullptr, places_, *vocabulary_);
+  if (!found.found) return false;
+  const SE3 T_w_c = found.T_w_c();
   // The camera must have been able to get there since the last valid pose: a frame that
   // shows another place for an instant (a glitch, a reflection) stays lost.
   const double dt = static_cast<double>(frame.timestamp_ns - last_ns_) * 1e-9;
@@ -74,29 +91,38 @@ bool TrackingPipeline::relocalise(const SensorFrame& frame, PoseEstimate* out) {
   }
   Keyframe* kf = nullptr;
   for (int i = 0; i < pool_->size() && kf == nullptr; ++i) {
-    if (pool_->at(i).id == place_id) kf = &pool_->at(i);
+    if (pool_->at(i).id == found.place_id) kf = &pool_->at(i);
   }
+  Attempt a;
   if (kf != nullptr) {
-    // Refined directly against the place's keyframe; it must pass every health check.
+    // Refined at full resolution against the place's dense keyframe, where it still is.
     adopt_map(kf);
-    const Attempt a = track_against(kf, T_w_c, frame.timestamp_ns);
-    if (a.failed != 0) return false;
-    velocity_.setZero();  // none carries across a loss
+    a = track_against(kf, T_w_c, frame.timestamp_ns);
+  }
+  velocity_.setZero();  // none carries across a loss
+  if (a.failed == 0) {
     has_last_ = false;
     accept(a, frame, out);
   } else {
-    // Its dense keyframe is gone: this frame becomes one, at the verified pose. Nothing dense
-    // can confirm that pose, so the 3-D match must be twice as strong.
-    if (best.inliers < 2 * relocalisation_limits_.min_inliers) return false;
-    start_keyframe(frame.timestamp_ns, T_w_c, out, true);
+    // The frame becomes a keyframe at the verified pose, tied to the place by the alignment
+    // where it measures the pose well enough for the map (else the loop module ties it).
+    KeyframeLink link = restart_link();
+    if (measures_pose(found.alignment)) {
+      link.reference_id = found.place_id;
+      link.kind = EdgeKind::kRelocalisation;
+      link.T_reference_keyframe = found.alignment.T_a_b;
+      link.information =
+          graph_information(found.alignment.forward.information / params_.covariance_scale,
+                            link.T_reference_keyframe);
+    }
+    fallback_ = nullptr;
+    start_keyframe(frame.timestamp_ns, T_w_c, link, out);
     ++counters_.relocalised_on_new_keyframe;
     out->T_w_c = T_w_c;
     out->flags |= kPoseValid;
     T_w_last_ = T_w_c;
     last_ns_ = frame.timestamp_ns;
     has_last_ = true;
-    velocity_.setZero();
-    fallback_ = nullptr;
     ++counters_.tracked;
   }
   out->flags |= kRelocalised | kReset;

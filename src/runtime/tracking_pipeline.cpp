@@ -20,8 +20,8 @@ constexpr int64_t kMaxVelocityGapNs = 200'000'000;
 Status TrackingPipeline::init(const Params& params, KeyframePool* keyframes) {
   params_ = params;
   pool_ = keyframes;
-  params_.tracker.inverse_depth_sigma = params.sensor.inverse_depth_sigma();
-  params_.tracker.inverse_depth_sigma_floor = params.sensor.inverse_depth_quantum_sigma();
+  params_.tracker = tracking_options(params);
+  params_.health = health_limits(params);
   undistorter_.init(params_.camera, params_.distortion);
   for (FramePyramid& f : frames_) {
     f.allocate(params_.camera, params_.sensor.depth_factor, params_.sensor.depth_range);
@@ -41,15 +41,41 @@ SE3 TrackingPipeline::predict_pose(int64_t t_ns) const {
   return T_w_last_ * SE3::exp(velocity_ * (static_cast<double>(t_ns - last_ns_) * 1e-9));
 }
 
-uint32_t TrackingPipeline::failed_checks(const TrackResult& r, const Keyframe& kf,
-                                         int64_t t_ns) const {
+uint32_t TrackingPipeline::failed_checks(const TrackResult& r, Keyframe* kf, int64_t t_ns) {
   HealthContext context;
   context.typical_sigma = typical_.photometric[0];
   if (has_last_ && t_ns > last_ns_) {
-    context.T_last_current = T_w_last_.inverse() * (kf.T_w_k * r.T_k_c);
+    context.T_last_current = T_w_last_.inverse() * (kf->T_w_k * r.T_k_c);
     context.dt_s = static_cast<double>(t_ns - last_ns_) * 1e-9;
   }
-  return failed_health_checks(r, context, params_.health);
+  uint32_t failed = failed_health_checks(r, context, params_.health);
+  // From an uncertain guess (after a loss) the planes of a plain scene can fit another place
+  // too: the same test, along the direction the depth determines worst.
+  const bool uncertain_guess = !previous_valid_;
+  if (failed == 0 && (r.depth_degenerate || uncertain_guess) &&
+      !unique_along_weak_direction(r, kf)) {
+    failed |= kWeakDirection;
+  }
+  return failed;
+}
+
+bool TrackingPipeline::unique_along_weak_direction(const TrackResult& r, Keyframe* kf) {
+  // A direction the depth leaves free rests on the image alone, and a texture-poor image can
+  // hold several minima along it within one frame's motion (doors along a corridor). The pose
+  // stands only if tracking from starts half a frame's largest motion to either side along that
+  // direction comes back to it.
+  constexpr double kFramePeriodS = 1.0 / 30.0;
+  constexpr double kSameM = 0.02, kSameRad = 1.0 * M_PI / 180.0;
+  const double step_m = 0.5 * params_.health.max_speed_m_s * kFramePeriodS;
+  for (const double sign : {-1.0, 1.0}) {
+    const SE3 start = r.T_k_c * SE3::exp(r.weak_direction * (sign * step_m));
+    const TrackResult other = tracker_.track(*kf, frame(), start, typical_, r.terms);
+    const SE3 d = r.T_k_c.inverse() * other.T_k_c;
+    if (!(d.translation().norm() <= kSameM && so3_log(d.quaternion()).norm() <= kSameRad)) {
+      return false;
+    }
+  }
+  return true;
 }
 
 TrackingPipeline::Attempt TrackingPipeline::track_against(Keyframe* kf, const SE3& T_w_guess,
@@ -57,7 +83,7 @@ TrackingPipeline::Attempt TrackingPipeline::track_against(Keyframe* kf, const SE
   Attempt a;
   a.kf = kf;
   a.r = tracker_.track(*kf, frame(), kf->T_w_k.inverse() * T_w_guess, typical_);
-  a.failed = failed_checks(a.r, *kf, t_ns);
+  a.failed = failed_checks(a.r, kf, t_ns);
   return a;
 }
 
@@ -86,7 +112,7 @@ TrackingPipeline::Attempt TrackingPipeline::track_from_guesses(Keyframe* kf, int
   Attempt a;
   a.kf = kf;
   a.r = tracker_.track_best(*kf, frame(), guesses, n, typical_);
-  a.failed = failed_checks(a.r, *kf, t_ns);
+  a.failed = failed_checks(a.r, kf, t_ns);
   return a;
 }
 
@@ -103,7 +129,7 @@ TrackingPipeline::Attempt TrackingPipeline::without_misfit_term(const Attempt& a
   Attempt b;
   b.kf = a.kf;
   b.r = tracker_.track(*a.kf, frame(), a.r.T_k_c, typical_, keep);
-  b.failed = failed_checks(b.r, *a.kf, t_ns);
+  b.failed = failed_checks(b.r, a.kf, t_ns);
   if (b.failed == 0) ++counters_.single_term;
   return b.failed == 0 ? b : a;
 }
@@ -111,6 +137,7 @@ TrackingPipeline::Attempt TrackingPipeline::without_misfit_term(const Attempt& a
 void TrackingPipeline::accept(const Attempt& a, const SensorFrame& frame, PoseEstimate* out) {
   reference_ = a.kf;
   fallback_ = nullptr;
+  lost_since_ns_ = -1;
   const TrackResult& r = a.r;
   out->T_w_c = a.T_w_c();
   out->keyframe_id = a.kf->id;
@@ -155,10 +182,15 @@ void TrackingPipeline::on_lost(const SensorFrame& frame, uint32_t failed, PoseEs
   out->flags |= kLost;
   out->failed_checks = failed;
   ++counters_.lost;
-  if (frame.timestamp_ns - last_ns_ >= params_.reset_after_lost_ns && this->frame().has_depth()) {
+  // Lost for the whole window, counted from the first lost frame: after an outage of the
+  // sensor the frames that follow are relocalisation's chances, not lost time already spent.
+  if (lost_since_ns_ < 0) lost_since_ns_ = frame.timestamp_ns;
+  if (frame.timestamp_ns - lost_since_ns_ >= params_.reset_after_lost_ns &&
+      this->frame().has_depth()) {
     // Restart from the last valid pose: the estimate jumps, so say so.
     fallback_ = nullptr;
-    start_keyframe(frame.timestamp_ns, T_w_last_, out, true);
+    lost_since_ns_ = -1;
+    start_keyframe(frame.timestamp_ns, T_w_last_, restart_link(), out);
     last_ns_ = frame.timestamp_ns;
     velocity_.setZero();
     last_valid_frame_kept_ = false;
@@ -204,7 +236,7 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
       out.flags |= kNotInitialised;
       return out;
     }
-    start_keyframe(frame.timestamp_ns, SE3(), &out);
+    start_keyframe(frame.timestamp_ns, SE3(), restart_link(), &out);
     T_w_last_ = SE3();
     last_ns_ = frame.timestamp_ns;
     has_last_ = true;
@@ -274,7 +306,7 @@ void TrackingPipeline::build_pending_keyframe() {
   const int current = current_;
   current_ = pending_keyframe_.frame_buffer;  // frame() is the keyframe's frame meanwhile
   PoseEstimate& pose = pending_keyframe_.pose;
-  start_keyframe(pose.timestamp_ns, pose.T_w_c, &pose);
+  start_keyframe(pose.timestamp_ns, pose.T_w_c, odometry_link(pose.T_w_c, pose.information), &pose);
   offer_to_mapper(pose, true);
   current_ = current;
 }

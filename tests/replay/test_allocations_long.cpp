@@ -9,12 +9,12 @@ namespace rgbdtam {
 namespace {
 
 TEST(Allocations, NoneWhileRelocalisingOrClosingALoop) {
-  // fr1_xyz with 100 frames cut: relocalised at once; or, without relocalisation, restarted and
+  // fr1_xyz with 150 frames cut: relocalised at once; or, without relocalisation, restarted and
   // joined to the map by a loop closure (pose graph, correction adopted, poses withheld).
   const std::string seq = testing::full_fr1_xyz();
   if (seq.empty()) GTEST_SKIP() << "full fr1_xyz not present on this machine";
   const std::string dir = testing::make_temp_dir("alloc_loop");
-  ASSERT_TRUE(testing::cut_frames(seq, dir + "/cut", 300, 100));
+  ASSERT_TRUE(testing::cut_frames(seq, dir + "/cut", 150, 150));
   for (const char* mode : {"loop.relocalise=true", "loop.relocalise=false"}) {
     ReplayJob job;
     const long calls = count_allocations_after_init({mode}, &job, dir + "/cut");

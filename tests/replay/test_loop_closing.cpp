@@ -1,5 +1,6 @@
 // Loop closure and relocalisation: the light keyframe store, the loop module on a synthetic
-// loop with known drift, and place recognition that never accepts an unrelated place.
+// loop with known drift, its covisible and reuse edges, relocalisation, and verification that
+// never accepts an unrelated place.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -7,7 +8,9 @@
 
 #include "config_files.hpp"
 #include "frontend_frames.hpp"
+#include "rgbdtam/hal/tum_trajectory.hpp"
 #include "rgbdtam/runtime/loop_closing.hpp"
+#include "rgbdtam/runtime/relocaliser.hpp"
 #include "synthetic_scene.hpp"
 #include "test_paths.hpp"
 #include "tum_writer.hpp"
@@ -38,6 +41,7 @@ void fill_keyframe(const FramePyramid& frame, LoopKeyframe* kf) {
   std::copy(frame.gray(0).data(), frame.gray(0).data() + kf->gray.size(), kf->gray.data());
   std::copy(frame.inverse_depth(0).data(), frame.inverse_depth(0).data() + kf->gray.size(),
             kf->inverse_depth.data());
+  capture_view(frame, &kf->view);
 }
 
 void render_into(const testing::SyntheticScene& scene, const SE3& T_w_c, FramePyramid* frame) {
@@ -48,12 +52,61 @@ void render_into(const testing::SyntheticScene& scene, const SE3& T_w_c, FramePy
     depth.data()[i] = f.depth[static_cast<size_t>(i)];
     frame->gray(0).data()[i] = f.gray[static_cast<size_t>(i)] / 255.f;
   }
+  frame->build_gray();
   frame->build_inverse_depth(depth);
 }
 
+// The loop module with its store and queue on a synthetic scene, fed keyframes as the tracker
+// would: each measured against its predecessor with the given relative pose.
+struct LoopFixture {
+  explicit LoopFixture(const testing::SyntheticScene& s, int places = 64) : scene(s) {
+    params = testing::synthetic_params(scene);
+    store.allocate(places, params.loop.features, shipped_vocabulary().words(), scene.camera);
+    corrections.allocate(2, places);
+    EXPECT_TRUE(loop.init(params, &shipped_vocabulary(), &store, &corrections, no_clock).is_ok());
+    kf.gray.allocate(scene.camera.width_px, scene.camera.height_px);
+    kf.inverse_depth.allocate(scene.camera.width_px, scene.camera.height_px);
+    kf.view.allocate(scene.camera);
+    frame.allocate(scene.camera, scene.depth_factor, DepthRange{0.3, 10.0});
+  }
+  // A keyframe seen at T_w_true, believed at T_w_k, measured from the previous one.
+  void keyframe(uint32_t id, const SE3& T_w_true, const SE3& T_w_k, const SE3& T_previous_k) {
+    render_into(scene, T_w_true, &frame);
+    fill_keyframe(frame, &kf);
+    kf.kind = LoopKeyframe::Kind::kKeyframe;
+    kf.keyframe_id = id;
+    kf.reference_id = id > 0 ? id - 1 : 0;
+    kf.reference_edge = id > 0 ? EdgeKind::kOdometry : EdgeKind::kRestart;
+    kf.timestamp_ns = static_cast<int64_t>(id) * 1'000'000'000;
+    kf.T_w_k = T_w_k;
+    kf.T_reference_keyframe = T_previous_k;
+    kf.information = 1e4 * Matrix6d::Identity();
+    kf.corrections_adopted = loop.counters().corrections;  // adopted at once, as in replay
+    loop.step(kf);
+    while (corrections.front() != nullptr) corrections.pop();
+  }
+  testing::SyntheticScene scene;
+  Params params;
+  PlaceStore store;
+  CorrectionQueue corrections;
+  LoopModule loop;
+  LoopKeyframe kf;
+  FramePyramid frame;
+};
+
+struct EdgeRecorder : LoopObserver {
+  std::vector<GraphEdgeEvent> edges;
+  void on_edge(const GraphEdgeEvent& e) override { edges.push_back(e); }
+  int count(EdgeKind kind) const {
+    int n = 0;
+    for (const GraphEdgeEvent& e : edges) n += e.kind == kind;
+    return n;
+  }
+};
+
 TEST(PlaceStore, AFullStoreForgetsTheOldestAndItsHandlesGoStale) {
   PlaceStore store;
-  store.allocate(4, 8, 16);
+  store.allocate(4, 8, 16, testing::SyntheticScene::half_resolution().camera);
   PlaceHandle first;
   for (uint32_t id = 0; id < 6; ++id) {
     PlaceRecord* r = store.begin_insert();
@@ -83,22 +136,9 @@ TEST(PlaceStore, AFullStoreForgetsTheOldestAndItsHandlesGoStale) {
 // its odometry turns 1 degree too far and slides 1 cm at every step.
 TEST(LoopModule, ASyntheticLoopWithKnownDriftIsFoundAndMostOfTheDriftRemoved) {
   // Half resolution: 25 rendered keyframes, cheap enough under qemu.
-  const testing::SyntheticScene scene = testing::SyntheticScene::half_resolution();
-  Params p = testing::synthetic_params(scene);
-  p.loop.min_age_s = 4.0;
-  const Vocabulary& voc = shipped_vocabulary();
-  PlaceStore store;
-  store.allocate(64, p.loop.features, voc.words());
-  CorrectionQueue corrections;
-  corrections.allocate(2, 64);
-  LoopModule loop;
-  ASSERT_TRUE(loop.init(p, &voc, &store, &corrections, no_clock).is_ok());
-  LoopKeyframe kf;
-  kf.gray.allocate(scene.camera.width_px, scene.camera.height_px);
-  kf.inverse_depth.allocate(scene.camera.width_px, scene.camera.height_px);
-  FramePyramid frame;
-  frame.allocate(scene.camera, scene.depth_factor, DepthRange{0.3, 10.0});
-
+  LoopFixture f(testing::SyntheticScene::half_resolution());
+  EdgeRecorder edges;
+  f.loop.set_observer(&edges);
   const SE3 start = testing::SyntheticScene::pose_at(0.0);
   std::vector<SE3> truth;
   for (int i = 0; i <= 24; ++i) {
@@ -106,125 +146,208 @@ TEST(LoopModule, ASyntheticLoopWithKnownDriftIsFoundAndMostOfTheDriftRemoved) {
     truth.push_back(start * SE3(Eigen::Quaterniond::Identity(), Vector3d(x, 0, 0)));
   }
   const SE3 bias(so3_exp(Vector3d(0, 1.0 * kDeg, 0)), Vector3d(0.01, 0, 0));
-  SE3 drifted = truth[0];
+  SE3 believed = truth[0];
   double drift_before = 0;
   for (size_t i = 0; i < truth.size(); ++i) {
-    if (i > 0) drifted = drifted * (truth[i - 1].inverse() * truth[i]) * bias;
-    drift_before = std::max(drift_before, (drifted.translation() - truth[i].translation()).norm());
-    render_into(scene, truth[i], &frame);
-    fill_keyframe(frame, &kf);
-    kf.keyframe_id = static_cast<uint32_t>(i);
-    kf.reference_id = i > 0 ? static_cast<uint32_t>(i - 1) : 0;
-    kf.timestamp_ns = static_cast<int64_t>(i) * 1'000'000'000;
-    kf.T_w_k = drifted;
-    kf.information = 1e4 * Matrix6d::Identity();
-    kf.corrections_adopted = loop.counters().corrections;  // adopted at once, as in replay
+    const SE3 step = i > 0 ? (truth[i - 1].inverse() * truth[i]) * bias : SE3();
     // Once corrected, the next keyframe continues from its corrected predecessor.
-    if (loop.counters().corrections > 0 && i > 0) {
-      kf.T_w_k =
-          store.in_order(store.size() - 1).T_w_k * (truth[i - 1].inverse() * truth[i]) * bias;
-      drifted = kf.T_w_k;
-    }
-    loop.step(kf);
-    while (corrections.front() != nullptr) corrections.pop();
+    if (i > 0) believed = f.store.in_order(f.store.size() - 1).T_w_k * step;
+    drift_before = std::max(drift_before, (believed.translation() - truth[i].translation()).norm());
+    f.keyframe(static_cast<uint32_t>(i), truth[i], believed, step);
   }
   double drift_after = 0;
-  for (int i = 0; i < store.size(); ++i) {
-    const PlaceRecord& r = store.in_order(i);
+  for (int i = 0; i < f.store.size(); ++i) {
+    const PlaceRecord& r = f.store.in_order(i);
     drift_after =
         std::max(drift_after, (r.T_w_k.translation() - truth[r.keyframe_id].translation()).norm());
   }
-  const LoopCounters& c = loop.counters();
+  const LoopCounters& c = f.loop.counters();
   std::printf(
-      "drift %.1f cm before, %.1f cm after; %u candidates, %u verified, %u loops, %u "
-      "corrections\n",
-      100 * drift_before, 100 * drift_after, c.candidates, c.verified, c.loops, c.corrections);
-  EXPECT_GE(c.loops, 1u);
+      "drift %.1f cm before, %.1f cm after; %u views aligned, %u revisit and %u covisible "
+      "edges, %u corrections\n",
+      100 * drift_before, 100 * drift_after, c.candidates, c.revisit_edges, c.covisible_edges,
+      c.corrections);
+  EXPECT_GE(c.revisit_edges, 1u);
   EXPECT_GE(c.corrections, 1u);
   EXPECT_GT(drift_before, 0.05);
   EXPECT_LT(drift_after, 0.5 * drift_before);
+  // Every edge the graph took is right: within 1 cm and 0.5 degrees of the true relative pose
+  // (odometry edges carry the bias by construction: 1 cm and 1 degree).
+  for (const GraphEdgeEvent& e : edges.edges) {
+    if (e.kind == EdgeKind::kOdometry) continue;
+    const SE3 error = (truth[e.from_id].inverse() * truth[e.to_id]).inverse() * e.T_from_to;
+    EXPECT_LT(error.translation().norm(), 0.01) << edge_kind_name(e.kind) << " edge";
+    EXPECT_LT(so3_log(error.quaternion()).norm(), 0.5 * kDeg) << edge_kind_name(e.kind) << " edge";
+  }
 }
 
-// A view described as the loop module describes a keyframe.
-struct DescribedView {
-  std::vector<Feature> features;
-  std::vector<BowEntry> bow;
-};
-
-DescribedView describe(PlaceRecognizer* recognizer, const FramePyramid& f, const Vocabulary& voc) {
-  recognizer->describe(f.gray(0), f.inverse_depth(0), f.intrinsics(0), voc);
-  return {{recognizer->features().begin(), recognizer->features().end()},
-          {recognizer->bow().begin(), recognizer->bow().end()}};
+// Keyframes a few centimetres apart along a short path: each is aligned with a neighbour the
+// graph reaches in a few edges (covisible), and none of them counts as a revisit.
+TEST(LoopModule, NeighboursAreCovisibleEdgesNotRevisits) {
+  LoopFixture f(testing::SyntheticScene::half_resolution());
+  EdgeRecorder edges;
+  f.loop.set_observer(&edges);
+  const SE3 start = testing::SyntheticScene::pose_at(0.0);
+  for (uint32_t i = 0; i < 6; ++i) {
+    const SE3 T = start * SE3(Eigen::Quaterniond::Identity(), Vector3d(0.03 * i, 0, 0));
+    const SE3 step(Eigen::Quaterniond::Identity(), Vector3d(i > 0 ? 0.03 : 0.0, 0, 0));
+    f.keyframe(i, T, T, step);
+  }
+  EXPECT_EQ(edges.count(EdgeKind::kOdometry), 5);
+  EXPECT_GE(edges.count(EdgeKind::kCovisible), 3);
+  EXPECT_EQ(edges.count(EdgeKind::kRevisit), 0);
+  EXPECT_EQ(f.loop.counters().corrections, 0u) << "the map agreed with every edge";
 }
 
-void remember(const DescribedView& v, uint32_t id, PlaceStore* store) {
-  PlaceRecord* r = store->begin_insert();
-  r->keyframe_id = id;
-  for (const Feature& f : v.features) ASSERT_TRUE(r->features.push_back(f));
-  for (const BowEntry& e : v.bow) ASSERT_TRUE(r->bow.push_back(e));
-  store->commit();
+// The tracker left keyframe 5 for keyframe 0 (map reuse): the frame both tracked ties them. The
+// map, drifted, put them 6 cm further apart than that measurement says: the edge corrects it.
+TEST(LoopModule, TheTrackersReuseOfAnEarlierKeyframeIsAnEdgeThatCorrectsTheMap) {
+  LoopFixture f(testing::SyntheticScene::half_resolution());
+  EdgeRecorder edges;
+  f.loop.set_observer(&edges);
+  const SE3 start = testing::SyntheticScene::pose_at(0.0);
+  const SE3 drift(Eigen::Quaterniond::Identity(), Vector3d(0.012, 0, 0));
+  SE3 believed = start;
+  for (uint32_t i = 0; i < 6; ++i) {
+    const SE3 T = start * SE3(so3_exp(Vector3d(0, 0.1 * i, 0)), Vector3d::Zero());  // turning
+    const SE3 step =
+        i > 0 ? (start * SE3(so3_exp(Vector3d(0, 0.1 * (i - 1), 0)), Vector3d::Zero())).inverse() *
+                    T * drift
+              : SE3();
+    if (i > 0) believed = believed * step;
+    f.keyframe(i, T, believed, step);
+  }
+  LoopKeyframe& reuse = f.kf;
+  reuse.kind = LoopKeyframe::Kind::kReuse;
+  reuse.keyframe_id = 0;
+  reuse.reference_id = 5;
+  reuse.reference_edge = EdgeKind::kReuse;
+  const SE3 truth_5 = start * SE3(so3_exp(Vector3d(0, 0.5, 0)), Vector3d::Zero());
+  reuse.T_reference_keyframe = truth_5.inverse() * start;
+  reuse.information = 1e6 * Matrix6d::Identity();
+  const double before = (f.store.in_order(5).T_w_k.translation() - truth_5.translation()).norm();
+  f.loop.step(reuse);
+  const double after = (f.store.in_order(5).T_w_k.translation() - truth_5.translation()).norm();
+  EXPECT_EQ(f.loop.counters().reuse_edges, 1u);
+  EXPECT_EQ(edges.count(EdgeKind::kReuse), 1);
+  EXPECT_EQ(f.loop.counters().corrections, 1u);
+  EXPECT_GT(before, 0.05);
+  EXPECT_LT(after, 0.2 * before);
 }
 
 // Keyframes of the real clip against the synthetic room, both ways: no place of one is a
-// place of the other, so nothing may be verified.
+// place of the other, so no view alignment may show the same place, from the place's own pose
+// or a guess turned and shifted from it; while the clip's own views do find each other, so the
+// rejections mean something.
 TEST(PlaceRecognition, UnrelatedPlacesAreRejected) {
   const testing::SyntheticScene scene;
-  const Params p = testing::synthetic_params(scene);
-  const Vocabulary& voc = shipped_vocabulary();
-  const VerificationLimits limits = VerificationLimits::of(p);
-  PlaceRecognizer recognizer;
-  recognizer.allocate(p);
-
   Params clip_params;
   ASSERT_TRUE(
       read_params_file(testing::source_path("config/tum_fr1.conf").c_str(), &clip_params).is_ok());
   FrontendFrames frames;
   ASSERT_TRUE(
       frames.open(testing::source_path("data/tum_fr1_xyz_clip").c_str(), clip_params).is_ok());
-  std::vector<DescribedView> clip, room;
+  std::vector<View> clip, room;
   for (int i = 0; i < frames.count(); i += 7) {
-    ASSERT_TRUE(frames.load(i));
-    clip.push_back(describe(&recognizer, frames.frame(), voc));
+    if (!frames.load(i)) continue;
+    clip.emplace_back();
+    clip.back().allocate(clip_params.camera);
+    capture_view(frames.frame(), &clip.back());
   }
+  ASSERT_GE(clip.size(), 6u);
   FramePyramid frame;
   frame.allocate(scene.camera, scene.depth_factor, DepthRange{0.3, 10.0});
-  for (int i = 0; i < 8; ++i) {
-    render_into(scene, testing::SyntheticScene::pose_at(0.3 * i), &frame);
-    room.push_back(describe(&recognizer, frame, voc));
+  for (int i = 0; i < 4; ++i) {
+    render_into(scene, testing::SyntheticScene::pose_at(0.5 * i), &frame);
+    room.emplace_back();
+    room.back().allocate(scene.camera);
+    capture_view(frame, &room.back());
   }
-
+  ViewAligner aligner;
+  aligner.allocate(clip_params.camera, clip_params.sensor.depth_factor,
+                   clip_params.sensor.depth_range, tracking_options(clip_params));
+  const HealthLimits limits = health_limits(clip_params);
+  const SE3 guesses[2] = {SE3(), SE3(so3_exp(Vector3d(0, 0.1, 0.05)), Vector3d(0.1, 0.05, 0))};
   int checked = 0;
-  auto expect_none_verified = [&](const std::vector<DescribedView>& places,
-                                  const std::vector<DescribedView>& queries) {
-    PlaceStore store;
-    store.allocate(16, p.loop.features, voc.words());
-    for (size_t i = 0; i < places.size(); ++i)
-      remember(places[i], static_cast<uint32_t>(i), &store);
-    FixedVector<Feature> features;
-    features.reserve_once(p.loop.features);
-    for (const DescribedView& q : queries) {
-      features.clear();
-      for (const Feature& f : q.features) ASSERT_TRUE(features.push_back(f));
-      for (int i = 0; i < store.size(); ++i) {
-        EXPECT_EQ(recognizer.verify(features, store.in_order(i), limits).inliers, 0)
-            << "a wrong place passed";
+  for (const View& c : clip) {
+    for (const View& r : room) {
+      for (int side = 0; side < 2; ++side) {
+        aligner.set(side, c);
+        aligner.set(1 - side, r);
+        EXPECT_FALSE(shows_same_place(aligner.align(guesses, 2, limits))) << "a wrong place passed";
         ++checked;
       }
     }
+  }
+  EXPECT_EQ(checked, static_cast<int>(2 * clip.size() * room.size()));
+  int found = 0;
+  for (size_t i = 1; i < clip.size(); ++i) {
+    aligner.set(0, clip[0]);
+    aligner.set(1, clip[i]);
+    found += shows_same_place(aligner.align(guesses, 1, limits));
+  }
+  EXPECT_GE(found, static_cast<int>(clip.size()) / 2) << "the clip's views find each other";
+}
+
+// A lost frame is found among the places of the keyframes before it, by appearance or near the
+// last valid pose, and put where the ground truth says it is.
+TEST(Relocaliser, FindsALaterFrameOfTheClipAmongItsPlaces) {
+  Params p;
+  ASSERT_TRUE(read_params_file(testing::source_path("config/tum_fr1.conf").c_str(), &p).is_ok());
+  FrontendFrames frames;
+  ASSERT_TRUE(frames.open(testing::source_path("data/tum_fr1_xyz_clip").c_str(), p).is_ok());
+  std::vector<StampedPose> gt;
+  int bad = 0;
+  ASSERT_TRUE(read_tum_trajectory(
+                  testing::source_path("data/tum_fr1_xyz_clip/groundtruth.txt").c_str(), &gt, &bad)
+                  .is_ok());
+  // The ground truth nearest a frame (100 Hz: within 5 ms).
+  auto truth_at = [&](int frame, SE3* T) {
+    const double t = frames.timestamp_ns(frame) * 1e-9;
+    const StampedPose* best = &gt[0];
+    for (const StampedPose& g : gt) {
+      if (std::fabs(g.stamp_s - t) < std::fabs(best->stamp_s - t)) best = &g;
+    }
+    *T = best->T_w_c;
+    return std::fabs(best->stamp_s - t) < 0.02;
   };
-  expect_none_verified(room, clip);
-  expect_none_verified(clip, room);
-  EXPECT_EQ(checked, 2 * static_cast<int>(room.size() * clip.size()));
-  // ... while a place does find itself again, so the rejections mean something.
   PlaceStore store;
-  store.allocate(2, p.loop.features, voc.words());
-  remember(clip[0], 0, &store);
-  ASSERT_TRUE(
-      frames.open(testing::source_path("data/tum_fr1_xyz_clip").c_str(), clip_params).is_ok());
-  ASSERT_TRUE(frames.load(3));
-  recognizer.describe(frames.frame().gray(0), frames.frame().inverse_depth(0),
-                      frames.frame().intrinsics(0), voc);
-  EXPECT_GE(recognizer.verify(store.in_order(0), limits).inliers, limits.min_inliers);
+  store.allocate(16, p.loop.features, shipped_vocabulary().words(), p.camera);
+  PlaceRecognizer recognizer;
+  recognizer.allocate(p);
+  // The first frame is the world's origin, as the tracker's first keyframe is.
+  SE3 T_gt_world;
+  ASSERT_TRUE(truth_at(0, &T_gt_world));
+  for (int i = 0; i < 30; i += 6) {
+    ASSERT_TRUE(frames.load(i));
+    SE3 T_gt_c;
+    ASSERT_TRUE(truth_at(i, &T_gt_c));
+    recognizer.describe(frames.frame().gray(0), frames.frame().inverse_depth(0),
+                        frames.frame().intrinsics(0), shipped_vocabulary());
+    PlaceRecord* r = store.begin_insert();
+    r->keyframe_id = static_cast<uint32_t>(i);
+    r->T_w_k = T_gt_world.inverse() * T_gt_c;
+    for (const Feature& feature : recognizer.features())
+      ASSERT_TRUE(r->features.push_back(feature));
+    for (const BowEntry& e : recognizer.bow()) ASSERT_TRUE(r->bow.push_back(e));
+    capture_view(frames.frame(), &r->view);
+    store.commit();
+  }
+  Relocaliser relocaliser;
+  relocaliser.allocate(p);
+  ASSERT_TRUE(frames.load(45));
+  SE3 T_gt_45;
+  ASSERT_TRUE(truth_at(45, &T_gt_45));
+  const SE3 T_w_45 = T_gt_world.inverse() * T_gt_45;
+  for (const bool with_last_pose : {true, false}) {
+    const SE3 last = T_w_45 * SE3(so3_exp(Vector3d(0, 3 * kDeg, 0)), Vector3d(0.05, 0, 0));
+    const Relocalisation r = relocaliser.find(frames.frame(), with_last_pose ? &last : nullptr,
+                                              &store, shipped_vocabulary());
+    ASSERT_TRUE(r.found) << (with_last_pose ? "near the last pose" : "by appearance alone");
+    const SE3 error = T_w_45.inverse() * r.T_w_c();
+    EXPECT_LT(error.translation().norm(), 0.03);
+    EXPECT_LT(so3_log(error.quaternion()).norm(), 2 * kDeg);
+  }
 }
 
 }  // namespace

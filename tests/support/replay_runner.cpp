@@ -33,7 +33,7 @@ ReplayOutcome replay_and_evaluate(const std::string& sequence, const std::string
   out.report = evaluate_all(gt, job.estimates(), &stamps);
   out.report.nees = evaluate_frame_to_frame_nees(gt, job.estimates(), job.covariances());
   out.final_report = evaluate_all(gt, job.final_estimates(), &stamps);
-  if (job.loop_enabled()) out.loop = job.loop_counters();
+  if (job.loop_enabled()) out.loop = job.loop().counters();
   out.counters = job.counters();
   out.tracking_median_ms = job.tracking_time().percentile_ms(0.5);
   out.ran = true;

@@ -35,6 +35,24 @@ HealthContext after_one_frame() {
   return c;
 }
 
+TEST(TrackingHealth, ADirectionTheDepthLeavesFreeNeedsTheImageToDetermineIt) {
+  HealthLimits limits;
+  limits.covariance_scale = 5000.0;
+  TrackResult r = healthy();
+  r.depth_degenerate = true;
+  // A textured wall: the image determines the wall's in-plane motion to 0.4 cm (reported).
+  r.weak_direction_std_m = 0.004 / std::sqrt(limits.covariance_scale);
+  EXPECT_EQ(failed_health_checks(r, after_one_frame(), limits), 0u);
+  r.weak_direction_std_m = 0.012 / std::sqrt(limits.covariance_scale);
+  EXPECT_EQ(failed_health_checks(r, after_one_frame(), limits), kWeakDirection);
+  // Where the depth determines every direction, the same spread is no concern of this check.
+  r.depth_degenerate = false;
+  EXPECT_EQ(failed_health_checks(r, after_one_frame(), limits), 0u);
+  char text[64];
+  describe_health(kWeakDirection, text, sizeof(text));
+  EXPECT_STREQ(text, "weak direction");
+}
+
 TEST(TrackingHealth, AHealthyFramePassesEveryCheck) {
   EXPECT_EQ(failed_health_checks(healthy(), after_one_frame(), HealthLimits()), 0u);
   char text[64];
@@ -71,6 +89,14 @@ TEST(TrackingHealth, EachCheckTriggersOnItsOwnCause) {
       {"rotation undetermined",
        [](TrackResult* r, HealthContext*) { r->rotation_std_rad = 1.0 * M_PI / 180.0; },
        kIllConditioned},
+      // The depth leaves a direction free (a corridor's axis) and the image barely determines it
+      // (these limits leave the information uncalibrated).
+      {"a corridor's axis undetermined",
+       [](TrackResult* r, HealthContext*) {
+         r->depth_degenerate = true;
+         r->weak_direction_std_m = 0.02;
+       },
+       kWeakDirection},
       {"4 m/s",
        [](TrackResult*, HealthContext* c) {
          c->T_last_current = SE3(Eigen::Quaterniond::Identity(), Vector3d(0, 0, 4.0 / 30.0));

@@ -19,7 +19,9 @@ int usage() {
                "  rgbdtam-stress noise <in> <out> --config <file> --kind depth|colour|both\n"
                "                [--seed <n>]\n"
                "  rgbdtam-stress there-and-back <in> <out> --config <file>\n"
-               "  rgbdtam-stress pan <out> --peak-deg-s <deg/s> [--frames <n>] [--fps <hz>]\n");
+               "  rgbdtam-stress pan <out> --peak-deg-s <deg/s> [--frames <n>] [--fps <hz>]\n"
+               "  rgbdtam-stress degenerate <out> --scene corridor|room [--frames <n>]\n"
+               "  rgbdtam-stress concat <first> <second> <out> [--gap-s <s>]\n");
   return 2;
 }
 }  // namespace
@@ -29,9 +31,9 @@ int main(int argc, char** argv) {
   if (argc < 3) return usage();
   const std::string verb = argv[1];
   const char* config = nullptr;
-  std::string kind;
+  std::string kind, scene;
   unsigned seed = 1;
-  double exposure_ms = 0, peak = 0, fps = 30;
+  double exposure_ms = 0, peak = 0, fps = 30, gap_s = 1.0;
   int every = 0, burst = 0, period = 0, frames = 150;
   std::vector<std::string> positional;
   for (int i = 2; i < argc; ++i) {
@@ -41,6 +43,10 @@ int main(int argc, char** argv) {
       config = argv[++i];
     } else if (a == "--exposure-ms" && has) {
       exposure_ms = std::atof(argv[++i]);
+    } else if (a == "--gap-s" && has) {
+      gap_s = std::atof(argv[++i]);
+    } else if (a == "--scene" && has) {
+      scene = argv[++i];
     } else if (a == "--kind" && has) {
       kind = argv[++i];
     } else if (a == "--seed" && has) {
@@ -78,6 +84,10 @@ int main(int argc, char** argv) {
     ok = noise_sequence(positional[0], positional[1], config, kind, seed);
   } else if (verb == "there-and-back" && positional.size() == 2 && config != nullptr) {
     ok = there_and_back(positional[0], positional[1], config);
+  } else if (verb == "concat" && positional.size() == 3) {
+    ok = concatenate(positional[0], positional[1], positional[2], gap_s);
+  } else if (verb == "degenerate" && positional.size() == 1) {
+    ok = degenerate_sequence(positional[0], scene, frames);
   } else if (verb == "pan" && positional.size() == 1) {
     ok = pan_sequence(positional[0], peak, frames, fps);
   } else {

@@ -422,6 +422,84 @@ bool pan_sequence(const std::string& out, double peak_deg_s, int frames, double 
   return true;
 }
 
+bool concatenate(const std::string& first, const std::string& second, const std::string& out,
+                 double gap_s) {
+  const char* names[3] = {"rgb.txt", "depth.txt", "groundtruth.txt"};
+  std::vector<std::string> lists[2][3];
+  for (int k = 0; k < 2; ++k) {
+    for (int i = 0; i < 3; ++i) {
+      if (!read_lines((k == 0 ? first : second) + "/" + names[i], &lists[k][i])) return false;
+    }
+  }
+  auto colour_span = [&](int k, double* begin, double* end) {
+    *begin = 1e300;
+    *end = -1e300;
+    for (const std::string& l : lists[k][0]) {
+      if (!is_data_line(l)) continue;
+      *begin = std::min(*begin, std::atof(l.c_str()));
+      *end = std::max(*end, std::atof(l.c_str()));
+    }
+    return *end >= *begin;
+  };
+  double b0, e0, b1, e1;
+  if (!colour_span(0, &b0, &e0) || !colour_span(1, &b1, &e1)) {
+    return fail("concat: no colour frames in an input");
+  }
+  // The second's stamps move to begin gap_s after the first's last frame. Both keep their ground
+  // truth (the same motion-capture frame for variants of one sequence), split halfway through
+  // the gap.
+  const double shift = e0 + gap_s - b1;
+  const double split = e0 + 0.5 * gap_s;
+  auto link_as = [&](const std::string& in, const char* name) {
+    char real[PATH_MAX];
+    if (::realpath(in.c_str(), real) == nullptr) return fail("missing " + in);
+    return ::symlink(real, (out + "/" + name).c_str()) == 0 || fail("cannot link " + out);
+  };
+  if (!create_folder(out) || !link_as(first, "a") || !link_as(second, "b")) return false;
+  for (int i = 0; i < 3; ++i) {
+    const bool images = i < 2;
+    std::vector<std::string> result = {"# " + std::string(names[i]) + " of " + first + ", then " +
+                                       second + " from " + std::to_string(gap_s) + " s later"};
+    for (int k = 0; k < 2; ++k) {
+      for (const std::string& l : lists[k][i]) {
+        if (!is_data_line(l)) continue;
+        const double t = std::atof(l.c_str()) + (k == 1 ? shift : 0.0);
+        if (!images && (k == 0 ? t > split : t <= split)) continue;
+        char stamp[32];
+        std::snprintf(stamp, sizeof(stamp), "%.6f", t);
+        const std::string rest = l.substr(l.find_first_of(" \t"));
+        const size_t file = rest.find_first_not_of(" \t");
+        result.push_back(images
+                             ? std::string(stamp) + " " + (k == 0 ? "a/" : "b/") + rest.substr(file)
+                             : stamp + rest);
+      }
+    }
+    if (!write_lines(out + "/" + names[i], result)) return false;
+  }
+  return copy_file(first, out, "calib.txt", false);
+}
+
+bool degenerate_sequence(const std::string& out, const std::string& layout, int frames) {
+  SyntheticScene scene;
+  if (layout == "corridor") {
+    scene.layout = SyntheticScene::Layout::kCorridor;
+  } else if (layout == "room") {
+    scene.layout = SyntheticScene::Layout::kPlainRoom;
+  } else {
+    return fail("degenerate: the scene is corridor or room, not '" + layout + "'");
+  }
+  if (frames < 2) return fail("degenerate: needs at least 2 frames");
+  scene.max_depth_m = 4.0;  // a structured-light sensor's range
+  constexpr double kFps = 30.0;
+  if (!create_folder(out) || !write_synthetic_sequence(out, scene, frames, kFps) ||
+      !write_text(out + "/camera.conf", synthetic_config(scene))) {
+    return fail("cannot write the synthetic sequence into " + out);
+  }
+  std::printf("%s: %d frames at 30 Hz of the %s (config: camera.conf)\n", out.c_str(), frames,
+              layout.c_str());
+  return true;
+}
+
 bool there_and_back(const std::string& in, const std::string& out, const std::string& config) {
   Params p;
   if (!load_params(config, &p)) return false;

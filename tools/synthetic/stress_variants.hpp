@@ -35,5 +35,11 @@ bool there_and_back(const std::string& in, const std::string& out, const std::st
 // A synthetic room seen by a camera panning at up to peak_deg_s, with exact ground truth and
 // its config as out/camera.conf.
 bool pan_sequence(const std::string& out, double peak_deg_s, int frames, double fps);
+// The second sequence after the first, gap_s after its last frame (a sensor outage between
+// two passes; variants of one sequence share its ground truth's frame).
+bool concatenate(const std::string& first, const std::string& second, const std::string& out,
+                 double gap_s);
+// A degenerate synthetic scene (SyntheticScene::Layout: "corridor" or "room"), 30 Hz.
+bool degenerate_sequence(const std::string& out, const std::string& layout, int frames);
 
 }  // namespace rgbdtam::testing

@@ -18,6 +18,10 @@ struct Plane {
   Vector3d u_axis, v_axis;
   Vector3d lo, hi;  // bounding box of the valid region
   double phase;
+  // A plain plane: this grey, with a faint ripple, and a dark mark (0.4 x 0.6 m) every
+  // mark_spacing_m along u (0: none) instead of the textured one's checker and blobs.
+  double plain_grey = -1.0;
+  double mark_spacing_m = 0.0;
 };
 
 double texture(double u, double v, double phase) {
@@ -27,6 +31,62 @@ double texture(double u, double v, double phase) {
                          std::tanh(6.0 * std::sin(k * v / 0.3 + 0.5 * phase));
   const double blobs = std::sin(k * u / 0.7 + 1.3 * phase) * std::cos(k * v / 0.55 - phase);
   return 0.5 + 0.28 * checker + 0.15 * blobs;
+}
+
+double shade(const Plane& pl, double u, double v) {
+  if (pl.plain_grey < 0.0) return texture(u, v, pl.phase);
+  // A ripple of 1.5 grey levels: paint is never perfectly even, and a real sensor's noise is
+  // larger still.
+  double value = pl.plain_grey + 0.006 * std::sin(2.0 * M_PI * u / 1.3 + pl.phase) *
+                                     std::sin(2.0 * M_PI * v / 0.9 - pl.phase);
+  if (pl.mark_spacing_m > 0.0) {
+    const double along = u - pl.mark_spacing_m * std::floor(u / pl.mark_spacing_m);
+    const double across = v - pl.phase * 0.1;
+    if (along < 0.4 && across > 0.0 && across < 0.6) value = 0.5 * pl.plain_grey;
+  }
+  return value;
+}
+
+std::vector<Plane> degenerate_planes(SyntheticScene::Layout layout) {
+  std::vector<Plane> planes;
+  const Vector3d X(1, 0, 0), Y(0, 1, 0), Z(0, 0, 1);
+  auto add = [&](Vector3d n, double d, Vector3d ua, Vector3d va, Vector3d lo, Vector3d hi,
+                 double phase, double grey, double marks) {
+    Plane pl{n, d, ua, va, lo, hi, phase};
+    pl.plain_grey = grey;
+    pl.mark_spacing_m = marks;
+    planes.push_back(pl);
+  };
+  if (layout == SyntheticScene::Layout::kCorridor) {
+    // Along +z from z = -2 m to the end wall at 40 m, beyond the sensor's range.
+    const double left = -0.6, right = 0.9, floor = 1.0, ceiling = -0.5;
+    add(X, left, Z, Y, Vector3d(left - 0.01, ceiling, -2), Vector3d(left + 0.01, floor, 40), 1.0,
+        0.6, 2.5);
+    add(-X, -right, Z, Y, Vector3d(right - 0.01, ceiling, -2), Vector3d(right + 0.01, floor, 40),
+        4.0, 0.55, 3.1);
+    add(-Y, -floor, Z, X, Vector3d(left, floor - 0.01, -2), Vector3d(right, floor + 0.01, 40), 2.0,
+        0.35, 0.0);
+    add(Y, ceiling, Z, X, Vector3d(left, ceiling - 0.01, -2), Vector3d(right, ceiling + 0.01, 40),
+        3.0, 0.8, 0.0);
+    add(-Z, -40.0, X, Y, Vector3d(left, ceiling, 39.99), Vector3d(right, floor, 40.01), 5.0, 0.5,
+        0.0);
+  } else {
+    // A room 4 m wide, 2.5 m high, 4 m deep around the camera's circle.
+    const double x0 = -2.0, x1 = 2.0, floor = 1.2, ceiling = -1.3, z0 = -1.0, z1 = 3.0;
+    add(X, x0, Z, Y, Vector3d(x0 - 0.01, ceiling, z0), Vector3d(x0 + 0.01, floor, z1), 1.0, 0.6,
+        1.7);
+    add(-X, -x1, Z, Y, Vector3d(x1 - 0.01, ceiling, z0), Vector3d(x1 + 0.01, floor, z1), 2.0, 0.55,
+        2.3);
+    add(-Z, -z1, X, Y, Vector3d(x0, ceiling, z1 - 0.01), Vector3d(x1, floor, z1 + 0.01), 3.0, 0.65,
+        2.9);
+    add(Z, z0, X, Y, Vector3d(x0, ceiling, z0 - 0.01), Vector3d(x1, floor, z0 + 0.01), 4.0, 0.5,
+        0.0);
+    add(-Y, -floor, X, Z, Vector3d(x0, floor - 0.01, z0), Vector3d(x1, floor + 0.01, z1), 5.0, 0.35,
+        0.0);
+    add(Y, ceiling, X, Z, Vector3d(x0, ceiling - 0.01, z0), Vector3d(x1, ceiling + 0.01, z1), 6.0,
+        0.8, 0.0);
+  }
+  return planes;
 }
 
 std::vector<Plane> scene_planes(bool with_box, bool box_in_corner, bool with_room, double wall_z) {
@@ -63,6 +123,21 @@ SE3 SyntheticScene::pose_at(double t) {
 }
 
 SE3 SyntheticScene::camera_at(double t) const {
+  if (layout == Layout::kCorridor) {
+    // 2.4 m/s along the corridor, the view swinging +-5 degrees at up to 30 deg/s.
+    constexpr double kSwingRad = 5.0 * M_PI / 180.0, kSwingRate = 6.0;
+    return SE3(so3_exp(Vector3d(0.3 * kSwingRad * std::sin(1.3 * kSwingRate * t),
+                                kSwingRad * std::sin(kSwingRate * t), 0.0)),
+               Vector3d(0.05 * std::sin(2.0 * t), 0.03 * std::sin(3.0 * t), 2.4 * t));
+  }
+  if (layout == Layout::kPlainRoom) {
+    // A circle of 0.6 m radius at 2.4 m/s while the view turns at 30 deg/s (1 degree a frame).
+    constexpr double kRadius = 0.6, kCircleRate = 4.0, kTurnRate = 30.0 * M_PI / 180.0;
+    const double a = kCircleRate * t;
+    return SE3(
+        so3_exp(Vector3d(0.0, kTurnRate * t, 0.0)),
+        Vector3d(kRadius * std::sin(a), 0.05 * std::sin(2.0 * t), 1.0 - kRadius * std::cos(a)));
+  }
   if (pan_peak_deg_s > 0.0) {
     constexpr double kYawAmplitude = 35.0 * M_PI / 180.0;
     const double w = pan_peak_deg_s * M_PI / 180.0 / kYawAmplitude;  // peak = amplitude * w
@@ -78,7 +153,10 @@ SE3 SyntheticScene::camera_at(double t) const {
 }
 
 SyntheticFrame SyntheticScene::render(const SE3& T_w_c) const {
-  const std::vector<Plane> planes = scene_planes(with_box, box_in_corner, with_room, back_wall_z_m);
+  const std::vector<Plane> planes =
+      layout == Layout::kTexturedRoom
+          ? scene_planes(with_box, box_in_corner, with_room, back_wall_z_m)
+          : degenerate_planes(layout);
   const int w = camera.width_px, h = camera.height_px;
   SyntheticFrame f;
   f.gray.resize(static_cast<size_t>(w) * h);
@@ -108,7 +186,7 @@ SyntheticFrame SyntheticScene::render(const SE3& T_w_c) const {
       const Plane& pl = planes[k];
       if ((x.array() < pl.lo.array()).any() || (x.array() > pl.hi.array()).any()) continue;
       best = t;
-      value = texture(x.dot(pl.u_axis), x.dot(pl.v_axis), pl.phase);
+      value = shade(pl, x.dot(pl.u_axis), x.dot(pl.v_axis));
     }
     *depth = best;
     return value;
@@ -128,11 +206,11 @@ SyntheticFrame SyntheticScene::render(const SE3& T_w_c) const {
 
 const std::vector<SyntheticFrame>& SyntheticScene::render_path(int frames, double fps) const {
   // Tests of one binary share the renders of one path.
-  using Key = std::tuple<int, int, double, bool, bool, bool, bool, double, double, double>;
+  using Key = std::tuple<int, int, double, bool, bool, bool, bool, double, double, double, int>;
   static std::map<Key, std::vector<SyntheticFrame>> cache;
   std::vector<SyntheticFrame>& out =
       cache[Key(camera.width_px, frames, fps, with_box, box_in_corner, with_room, diagonal_path,
-                back_wall_z_m, max_depth_m, pan_peak_deg_s)];
+                back_wall_z_m, max_depth_m, pan_peak_deg_s, static_cast<int>(layout))];
   while (static_cast<int>(out.size()) < frames) {
     out.push_back(render(camera_at(static_cast<double>(out.size()) / fps)));
   }

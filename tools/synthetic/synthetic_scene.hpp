@@ -55,6 +55,14 @@ struct SyntheticScene {
   double pan_peak_deg_s = 0.0;
   SE3 camera_at(double t_s) const;
   bool with_room = true;  // side walls and floor
+  // Degenerate scenes for the health checks: plain planes with a few sharp-edged marks (doors,
+  // posters), little else. A corridor (walls 0.6 and 0.9 m to the sides, floor 1 m below,
+  // ceiling 0.5 m above) walked along at 2.4 m/s (8 cm a frame at 30 Hz) with the view swinging
+  // +-5 degrees (up to 1 degree a frame); or a plain room (4 x 2.5 x 4 m) crossed on a circle
+  // at the same speed while the view turns 1 degree a frame. Their own paths replace the ones
+  // above.
+  enum class Layout { kTexturedRoom, kCorridor, kPlainRoom };
+  Layout layout = Layout::kTexturedRoom;
   // The box in the first view's lower-left corner instead of near the centre: as the camera
   // glides right and up it slides out of the corner, and the wall it covers meanwhile is wall
   // the first view never saw (in the centre it would hide a strip of the first keyframe's wall).

@@ -13,6 +13,13 @@
 
 namespace rgbdtam {
 
+// The information of a tracked pose T_k_c, which the tracker measures for the perturbation
+// T_c_k exp(-delta), for the graph's perturbation T_k_c exp(xi).
+Matrix6d graph_information(const Matrix6d& tracker_information, const SE3& T_k_c);
+// The information of T_a_b = T_a_f T_b_f^-1, from those of T_a_f and T_b_f (graph convention):
+// two keyframes tied by a frame both measured.
+Matrix6d information_through(const Matrix6d& info_a_f, const Matrix6d& info_b_f, const SE3& T_b_f);
+
 struct PoseGraphStats {
   int iterations = 0;         // Gauss-Newton steps taken
   int cg_iterations = 0;      // over all steps

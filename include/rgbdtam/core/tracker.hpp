@@ -20,7 +20,10 @@ struct TrackerOptions {
   ResidualConfig residuals;
   int photometric_points_finest = 8991;  // x1/3 per coarser level (paper: up to 8K per keyframe)
   float gradient_top_fraction = 0.4f;    // photometric points keep the strongest 40 % gradients
-  float canny_low = 20.f;                // Sobel-3 magnitude, 8-bit grey levels
+  // Subsampled geometric points: one pixel in this many, per direction, finest first (paper:
+  // every pixel at 80x60, one in 2, 3, 4 at the finer levels).
+  int geometric_step[kPyramidLevels] = {4, 3, 2, 1};
+  float canny_low = 20.f;  // Sobel-3 magnitude, 8-bit grey levels
   float canny_high = 60.f;
   // Finest first. Four at the two finest levels, as the authors' real-time mode: 0.88 cm
   // all-frames ATE on fr1_xyz at 6.8 ms median, against 0.84 cm at 8.1 ms with {6, 8}.
@@ -140,6 +143,15 @@ struct TrackResult {
   double photometric_inliers = 1.0, geometric_inliers = 1.0;
   // One standard deviation of the pose along its worst direction, from the information.
   double translation_std_m = 0.0, rotation_std_rad = 0.0;
+  // The sensor's depth leaves a direction of motion nearly free (planes sliding along planes:
+  // its information there, translation counted in scene depths, under 1e-4 of its strongest),
+  // so the pose along it rests on the image alone; and the standard deviation along that
+  // direction, as a displacement at the scene's depth. From the information (uncalibrated).
+  bool depth_degenerate = false;
+  double weak_direction_std_m = 0.0;
+  // The twist (v, omega) that moves the scene 1 m at its depth along the direction the depth
+  // determines worst (whether or not degenerate); zero without the depth term.
+  Vector6d weak_direction = Vector6d::Zero();
   // Finest-level J^T W J of the used terms, perturbation delta in T_c_k exp(-delta), (v, omega).
   Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
 };
@@ -167,6 +179,7 @@ class Tracker {
     int valid = 0;
     int total = 0;
     Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
+    Eigen::Matrix<double, 6, 6> H_geometric = Eigen::Matrix<double, 6, 6>::Zero();  // its part
     Vector6d g = Vector6d::Zero();
     bool has_normal_equations = false;  // H and g are formed
   };
@@ -180,6 +193,8 @@ class Tracker {
                            bool new_scale, int max_iterations, int* iterations);
   void describe_fit(const Keyframe& kf, const FramePyramid& frame, const SE3& T_c_k,
                     float reference_sigma, TrackResult* out);
+  void describe_depth_degeneracy(const TrackPoints& geo, const Eigen::Matrix<double, 6, 6>& H_geo,
+                                 TrackResult* out);
   void motion_stats(const Keyframe& kf, const FramePyramid& frame, const SE3& T_c_k,
                     double* visible, double* parallax);
   // Projects every point at the level: u, v and 1/z into proj_*; u = kOutside where the point

@@ -21,6 +21,11 @@ struct HealthLimits {
   // (10 cm, 5 degrees), beyond which the data do not determine the pose.
   double max_translation_std_m = 0.01;
   double max_rotation_std_rad = 0.5 * 3.14159265358979 / 180.0;
+  // Where the depth leaves a direction nearly free (planes sliding along planes), the image
+  // alone must determine it: its reported standard deviation (covariance_scale applied) at most
+  // a tenth of the false-valid tolerance, as above.
+  double max_weak_direction_std_m = 0.01;
+  double covariance_scale = 1.0;  // reported covariance = this x inverse information
   // Physical limits of the camera's motion since the last valid pose.
   double max_speed_m_s = 3.0;
   double max_rotation_rate_rad_s = 2.0 * 3.14159265358979;  // 360 deg/s
@@ -34,6 +39,7 @@ enum HealthCheck : uint32_t {
   kCostAboveTypical = 1u << 3,  // the photometric scale jumped over its typical value
   kIllConditioned = 1u << 4,    // the used terms do not determine the pose
   kTooFast = 1u << 5,           // faster than the physical limits
+  kWeakDirection = 1u << 6,     // a direction the depth leaves free is not determined either
 };
 
 struct HealthContext {

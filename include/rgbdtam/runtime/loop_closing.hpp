@@ -1,10 +1,20 @@
 #pragma once
-// The loop module (paper sec. VI): every new keyframe is described (features, bag of words),
-// matched against the remembered places, and remembered itself. A place found again by
-// consecutive keyframes and verified in 3-D becomes a loop edge; when the loop disagrees with
-// the map, the SE(3) pose graph of all remembered keyframes is optimised and the corrected
-// poses go to the tracker as a LoopCorrection it adopts between frames.
-// step() is the same code synchronously (replay) or on its own thread (WorkerThread).
+// The loop module (paper sec. VI) and its keyframe graph. Every new keyframe is remembered as a
+// place (features, bag of words, coarse view) and tied into the graph: by the tracker's
+// measurement against its reference, and by direct alignment of its view with the views of
+// chosen places (core/view_alignment.hpp), each verified alignment an edge:
+//   - a covisible neighbour, a few edges away in the graph (the keyframe is aligned to more
+//     than its predecessor);
+//   - revisits by geometry: places the map puts near the keyframe but which the graph joins
+//     only through a long path (drift lies along it), the longest first;
+//   - revisits by appearance: the bag of words' best places outside the keyframe's
+//     neighbourhood, or in a stretch the graph does not join at all (after a restart), with
+//     the features' RANSAC as the first guess.
+// The tracker's reuse of an earlier keyframe is an edge too. An edge that disagrees with the
+// map optimises the SE(3) pose graph of all places, and the corrected poses go to the tracker
+// as a LoopCorrection it adopts between frames.
+// step() is the same code synchronously (replay) or on its own thread (WorkerThread); after
+// init() nothing allocates.
 
 #include "rgbdtam/core/pose_graph.hpp"
 #include "rgbdtam/runtime/latency_stats.hpp"
@@ -17,7 +27,7 @@ namespace rgbdtam {
 
 class LoopQueue : public SpscRing<LoopKeyframe> {
  public:
-  void allocate(int slots, int width, int height);
+  void allocate(int slots, const PinholeIntrinsics& camera);
 };
 
 class CorrectionQueue : public SpscRing<LoopCorrection> {
@@ -27,58 +37,72 @@ class CorrectionQueue : public SpscRing<LoopCorrection> {
 
 struct LoopCounters {
   uint32_t keyframes = 0;            // described and remembered
-  uint32_t candidates = 0;           // places verified in 3-D
-  uint32_t verified = 0;             // ... that passed
-  uint32_t loops = 0;                // verified and consistent: loop edges
-  uint32_t corrections = 0;          // loops that moved the map
+  uint32_t candidates = 0;           // places whose views were aligned with a keyframe's
+  uint32_t covisible_edges = 0;      // ... verified: a neighbour
+  uint32_t revisit_edges = 0;        // ... verified: a revisit (a loop)
+  uint32_t reuse_edges = 0;          // the tracker took up an earlier keyframe
+  uint32_t edges_dropped = 0;        // the graph's edge store was full
+  uint32_t corrections = 0;          // optimisations that moved the map
   uint32_t corrections_dropped = 0;  // the tracker had not taken the previous one
 };
 
-// A place the loop module verified in 3-D for a new keyframe, for tools that check place
-// recognition against ground truth. Called on the loop module's thread.
-struct PlaceMatchEvent {
-  uint32_t query_id = 0, place_id = 0;
-  int64_t query_ns = 0, place_ns = 0;
-  SE3 T_place_query;
-  int inliers = 0;
-  bool loop = false;  // it became a loop edge (consistent, and the best of its query)
+constexpr int kEdgeKinds = static_cast<int>(EdgeKind::kReuse) + 1;
+const char* edge_kind_name(EdgeKind kind);
+
+// An edge of the keyframe graph, for tools that check it against ground truth. Called on the
+// loop module's thread when the edge enters the graph.
+struct GraphEdgeEvent {
+  uint32_t from_id = 0, to_id = 0;  // keyframe ids
+  SE3 T_from_to;
+  EdgeKind kind = EdgeKind::kOdometry;
 };
 
 class LoopObserver {
  public:
   virtual ~LoopObserver() = default;
-  virtual void on_verified(const PlaceMatchEvent& event) = 0;
+  virtual void on_edge(const GraphEdgeEvent& event) = 0;
+};
+
+// The revisit candidates a keyframe's view is aligned with, at most.
+struct CandidateBudget {
+  static constexpr int kCovisible = 1;
+  static constexpr int kGeometric = 2;
+  static constexpr int kAppearance = 3;
+  static constexpr int kTotal = kCovisible + kGeometric + kAppearance;
 };
 
 class LoopModule {
  public:
   Status init(const Params& params, const Vocabulary* vocabulary, PlaceStore* store,
               CorrectionQueue* corrections, ClockFn clock);
-  void step(const LoopKeyframe& keyframe);
+  void step(const LoopKeyframe& message);
   void tick() {}
   void finish() {}
   void set_observer(LoopObserver* observer) { observer_ = observer; }
   const LoopCounters& counters() const { return counters_; }
   const LatencyStats& describe_time() const { return describe_time_; }
-  const LatencyStats& query_time() const { return query_time_; }
+  const LatencyStats& search_time() const { return search_time_; }  // candidates and alignment
   const LatencyStats& optimise_time() const { return optimise_time_; }
+  // Bytes init() takes besides the place store, for the memory budget.
+  static size_t bytes_needed(const Params& params);
 
  private:
-  struct LoopEdge {
+  struct Edge {
     PlaceHandle from, to;
     SE3 T_from_to;
-    Matrix6d information;
+    Matrix6d information;  // of T_from_to exp(xi)
+    EdgeKind kind;
   };
-  struct Found {
-    PlaceHandle place;
-    uint32_t keyframe_id = 0;
-    SE3 T_place_query;
-    RigidRansacResult fit;
-  };
-  bool detect(const LoopKeyframe& query, Found* found);
+  void add_keyframe(const LoopKeyframe& keyframe);
+  void add_reuse(const LoopKeyframe& message);
   void remember(const LoopKeyframe& keyframe, const SE3& T_w_k);
-  void close_loop(const Found& found, uint32_t query_id);
-  void optimise(uint32_t query_id, uint32_t match_id);
+  // Adds the edge; returns whether it disagrees with the map by more than loop.min_correction.
+  bool add_edge(const Edge& edge);
+  // Graph distance (edges with a measurement) of every place from the one in `slot`; -1 where
+  // the graph does not join them.
+  void measure_hops(int slot);
+  int choose_candidates(int query_slot, PlaceCandidate* out);
+  void optimise();
 
   Params params_;
   const Vocabulary* vocabulary_ = nullptr;
@@ -88,17 +112,17 @@ class LoopModule {
   LoopObserver* observer_ = nullptr;
   PlaceRecognizer recognizer_;
   VerificationLimits limits_;
+  ViewAligner aligner_;
   PoseGraph graph_;
-  FixedVector<LoopEdge> loops_;
-  uint32_t segment_ = 0;
+  FixedVector<Edge> edges_;
+  // Breadth-first search over the graph: hops per slot, the queue, adjacency in CSR form.
+  std::unique_ptr<int[]> hops_, queue_, first_neighbour_, neighbours_;
+  std::unique_ptr<int[]> node_of_slot_;  // the pose graph's node of each slot
   // The last correction, for keyframes the tracker made before adopting it.
   uint32_t corrections_sent_ = 0;
   SE3 last_correction_;
-  // Consistency over consecutive queries.
-  uint32_t last_match_id_ = 0;
-  int consistent_ = 0;
   LoopCounters counters_;
-  LatencyStats describe_time_, query_time_, optimise_time_;
+  LatencyStats describe_time_, search_time_, optimise_time_;
 };
 
 }  // namespace rgbdtam

@@ -7,6 +7,7 @@
 #include "rgbdtam/core/fixed_vector.hpp"
 #include "rgbdtam/core/image.hpp"
 #include "rgbdtam/core/se3.hpp"
+#include "rgbdtam/core/view_alignment.hpp"
 #include "rgbdtam/runtime/mavlink.hpp"
 
 namespace rgbdtam {
@@ -56,17 +57,35 @@ struct PoseEstimate {
   Eigen::Matrix<double, 6, 6> information;
 };
 
-// Tracker -> loop module, one per new keyframe. The slot owns its images.
+// How a keyframe's pose was measured against the keyframe it names as its reference.
+enum class EdgeKind : uint8_t {
+  kOdometry,        // tracked against it
+  kRestart,         // none: tracking restarted, the two poses are not related
+  kRelocalisation,  // a lost frame found again at the reference's place
+  kCovisible,       // graph edges the loop module adds: a neighbour's view aligned ...
+  kRevisit,         // ... a place revisited, its view aligned
+  kReuse,           // the tracker took up an earlier keyframe again (map reuse)
+};
+
+// Tracker -> loop module: a new keyframe (kind kKeyframe), or the tracker taking up an earlier
+// keyframe (kReuse: keyframe_id is the earlier one, reference_id the one left; no images).
+// The slot owns its images.
 struct LoopKeyframe {
+  enum class Kind : uint8_t { kKeyframe, kReuse };
+  Kind kind = Kind::kKeyframe;
   uint32_t keyframe_id = 0;
-  uint32_t reference_id = 0;  // the keyframe it was tracked against
-  bool after_reset = false;   // started by a restart: its pose is not related to the reference's
+  uint32_t reference_id = 0;                      // the keyframe it was measured against
+  EdgeKind reference_edge = EdgeKind::kOdometry;  // ... and how
   uint32_t corrections_adopted = 0;  // LoopCorrections the tracker had applied when it was made
   int64_t timestamp_ns = 0;
   SE3 T_w_k;
-  Matrix6d information = Matrix6d::Zero();  // of its pose relative to the reference, as tracked
-  ImageF gray;                              // level 0, undistorted, [0,1]
-  ImageF inverse_depth;                     // level 0 sensor inverse depth, 1/m
+  // The measurement: the keyframe in its reference, and its information for a right
+  // perturbation T_reference_keyframe exp(xi), xi = (v, omega); zero for a restart.
+  SE3 T_reference_keyframe;
+  Matrix6d information = Matrix6d::Zero();
+  ImageF gray;           // level 0, undistorted, [0,1]
+  ImageF inverse_depth;  // level 0 sensor inverse depth, 1/m
+  View view;             // the pyramid's view level, remembered with the place
 };
 
 struct KeyframePose {
@@ -77,7 +96,6 @@ struct KeyframePose {
 // Loop module -> tracker, after a loop closure: every remembered keyframe's corrected pose,
 // sorted by id. The tracker adopts it between frames.
 struct LoopCorrection {
-  uint32_t query_id = 0, match_id = 0;  // the keyframes the loop joined
   FixedVector<KeyframePose> poses;
 };
 

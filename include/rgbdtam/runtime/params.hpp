@@ -40,12 +40,11 @@ struct LoopParams {
   int places = 1024;          // light records remembered (the oldest goes when full)
   int features = 400;         // per keyframe
   int queue_keyframes = 4;    // tracker -> loop module slots
-  // A place of the same unbroken stretch is a loop candidate only this long after it was seen:
-  // sooner, the tracker's own map still holds it.
-  double min_age_s = 20.0;
-  int min_inliers = 40;        // 3-D matches a rigid motion must explain
-  int consistent_queries = 2;  // consecutive keyframes that must find the same place
-  // A verified loop moves the map only when it disagrees with it by more than this.
+  // 3-D feature matches a rigid motion must explain to be a first guess of a place's pose (the
+  // views' direct alignment decides whether it is the place).
+  int min_inliers = 12;
+  // A revisit optimises the map when it disagrees with it by more than this, and the
+  // optimised map is sent to the tracker when some place moved by more than this.
   double min_correction_m = 0.02;
   double min_correction_rad = 1.0 * M_PI / 180.0;
   // A correction that moves the camera further than this is a jump a consumer differencing
@@ -84,6 +83,11 @@ struct Params {
   int map_seeds = 10000;  // edge pixels mapped per keyframe
   LoopParams loop;
 };
+
+// The tracker's options with the sensor's noise model in them.
+TrackerOptions tracking_options(const Params& p);
+// The health limits with the covariance calibration in them.
+HealthLimits health_limits(const Params& p);
 
 // Parses `key = value` lines (# comments). `source` names the file in errors; a file path
 // value (loop.vocabulary) is relative to source's folder.

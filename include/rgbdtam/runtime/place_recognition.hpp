@@ -1,18 +1,20 @@
 #pragma once
 // The light keyframe store that loop closure and relocalisation share, and the recogniser
-// both use to describe a view and verify a match.
+// both use to describe a view and find a first guess of a match.
 //
-// Every keyframe leaves a light record (pose, features with 3-D points, bag-of-words vector)
-// that outlives its dense slot in the tracker's pool, so the map remembers far more places than
-// the pool holds. Records live in slots of fixed capacity; a handle (slot, generation) goes
-// stale when its slot is reused. Policy when full: the oldest record is evicted (counted), as
-// a ring: a robot that runs for hours keeps the places of its last `loop.places` keyframes.
-// Threads: the loop module writes, the tracker reads (relocalisation); both under mutex().
+// Every keyframe leaves a light record (pose, features with 3-D points, bag-of-words vector, and
+// its coarse view for direct alignment) that outlives its dense slot in the tracker's pool, so
+// the map remembers far more places than the pool holds. Records live in slots of fixed capacity; a
+// handle (slot, generation) goes stale when its slot is reused. Policy when full: the oldest record
+// is evicted (counted), as a ring: a robot that runs for hours keeps the places of its last
+// `loop.places` keyframes. Threads: the loop module writes, the tracker reads (relocalisation);
+// both under mutex().
 
 #include <mutex>
 
 #include "rgbdtam/core/place_database.hpp"
 #include "rgbdtam/core/rigid_alignment.hpp"
+#include "rgbdtam/runtime/messages.hpp"
 #include "rgbdtam/runtime/params.hpp"
 
 namespace rgbdtam {
@@ -20,14 +22,11 @@ namespace rgbdtam {
 struct PlaceRecord {
   uint32_t keyframe_id = 0;
   uint32_t generation = 0;
-  uint32_t segment = 0;  // stretches between restarts: poses within one are related
   int64_t timestamp_ns = 0;
   SE3 T_w_k;
-  uint32_t reference_id = 0;
-  bool after_reset = false;
-  Matrix6d information = Matrix6d::Zero();  // relative to the reference, keyframe-side (v, omega)
   FixedVector<Feature> features;
   BowVector bow;
+  View view;
 };
 
 struct PlaceHandle {
@@ -37,7 +36,8 @@ struct PlaceHandle {
 
 class PlaceStore {
  public:
-  void allocate(int capacity, int features_per_place, int words);
+  // camera: the full-resolution camera, whose view level every place keeps.
+  void allocate(int capacity, int features_per_place, int words, const PinholeIntrinsics& camera);
   std::mutex& mutex() { return mutex_; }
 
   // Under the lock. The record the next keyframe goes to, the oldest evicted when full; fill
@@ -58,7 +58,8 @@ class PlaceStore {
   PlaceDatabase& database() { return database_; }
 
   // Bytes that allocate() takes, for the memory budget.
-  static size_t bytes_needed(int capacity, int features_per_place, int words);
+  static size_t bytes_needed(int capacity, int features_per_place, int words,
+                             const PinholeIntrinsics& camera);
 
  private:
   int slot_of(int order) const { return (first_ + order) % capacity_; }
@@ -70,31 +71,51 @@ class PlaceStore {
   uint32_t evicted_ = 0;
 };
 
-// What a place match must show to be believed.
+// What a feature match must show to give a first guess of a place's pose (direct alignment of
+// the views decides whether it is the place).
 struct VerificationLimits {
-  int min_inliers = 40;
+  int min_inliers = 12;
   double inverse_depth_sigma = 0.01;  // the sensor's, for the inlier threshold
   static VerificationLimits of(const Params& p) {
     return {p.loop.min_inliers, p.sensor.inverse_depth_sigma()};
   }
 };
 
-// Describes one view (features, bag of words) and verifies it against remembered places.
+// A remembered place to align a view with, and first guesses of the view's pose in it.
+struct PlaceCandidate {
+  static constexpr int kMaxGuesses = 3;
+  int slot = -1;
+  EdgeKind kind = EdgeKind::kRevisit;
+  SE3 guesses[kMaxGuesses];  // T_place_view
+  int guess_count = 0;
+  void add_guess(const SE3& T_place_view) {
+    if (guess_count < kMaxGuesses) guesses[guess_count++] = T_place_view;
+  }
+};
+
+// Describes one view (features, bag of words) and finds it among remembered places.
 class PlaceRecognizer {
  public:
   void allocate(const Params& params);
+  static size_t bytes_needed(const Params& params);
   void describe(const ImageF& gray, const ImageF& inverse_depth, const PinholeIntrinsics& k,
                 const Vocabulary& vocabulary);
   const FixedVector<Feature>& features() const { return features_; }
   const BowVector& bow() const { return bow_; }
-  // Descriptor matches lifted to 3-D, RANSAC with Horn's closed form: T_b_a is the place's
-  // keyframe from this view. inliers = 0 when it does not fit.
+  // Descriptor matches lifted to 3-D, RANSAC with Horn's closed form: T_b_a is this view in the
+  // place's keyframe. inliers = 0 when it does not fit.
   RigidRansacResult verify(const PlaceRecord& place, const VerificationLimits& limits) {
     return verify(features_, place, limits);
   }
   // The same for other features than the described view's (at most loop.features).
   RigidRansacResult verify(const FixedVector<Feature>& query, const PlaceRecord& place,
                            const VerificationLimits& limits);
+  // Appends to out[n..) the described view's best places by bag of words among those allowed
+  // and not in out yet, at most `max` and each within half the best score, with the features'
+  // fit as the first guess where they fit. Returns the new count. Under the store's lock.
+  int add_appearance_candidates(PlaceStore& store, PlaceDatabase::Filter allowed,
+                                const void* context, int max, const VerificationLimits& limits,
+                                PlaceCandidate* out, int n);
 
  private:
   FeatureExtractor extractor_;

@@ -9,6 +9,7 @@
 #include "rgbdtam/runtime/mapping.hpp"
 #include "rgbdtam/runtime/messages.hpp"
 #include "rgbdtam/runtime/params.hpp"
+#include "rgbdtam/runtime/relocaliser.hpp"
 
 namespace rgbdtam {
 
@@ -28,7 +29,7 @@ struct TrackingCounters {
   uint32_t recovered_by_guesses = 0;  // ... and passed from another initial guess
   uint32_t recovered_by_last_frame = 0;      // ... or against the last valid frame
   uint32_t relocalised = 0;                  // lost frames found again in the map
-  uint32_t relocalised_on_new_keyframe = 0;  // ... whose place's dense keyframe was recycled
+  uint32_t relocalised_on_new_keyframe = 0;  // ... at a place whose dense keyframe is gone
   uint32_t loop_corrections = 0;             // loop closures adopted
   uint32_t withheld = 0;                     // tracked frames not reported valid after a correction
   uint32_t loop_dropped_keyframes = 0;       // the loop queue was full: not remembered as places
@@ -56,6 +57,14 @@ class TrackingPipeline {
   bool keyframe_pose(uint32_t id, SE3* T_w_k) const;
 
  private:
+  // What ties a new keyframe into the map's graph: the keyframe or place it was measured
+  // against, how, the measurement, and its information (graph convention).
+  struct KeyframeLink {
+    uint32_t reference_id = 0;
+    EdgeKind kind = EdgeKind::kRestart;
+    SE3 T_reference_keyframe;
+    Matrix6d information = Matrix6d::Zero();
+  };
   // A tracking result against one keyframe and the health checks it failed.
   struct Attempt {
     Keyframe* kf = nullptr;
@@ -68,18 +77,22 @@ class TrackingPipeline {
   // The wider basin: several initial guesses screened at the coarsest level.
   Attempt track_from_guesses(Keyframe* kf, int64_t t_ns);
   Attempt without_misfit_term(const Attempt& a, int64_t t_ns);
-  uint32_t failed_checks(const TrackResult& r, const Keyframe& kf, int64_t t_ns) const;
+  uint32_t failed_checks(const TrackResult& r, Keyframe* kf, int64_t t_ns);
+  bool unique_along_weak_direction(const TrackResult& r, Keyframe* kf);
   bool relocalise(const SensorFrame& frame, PoseEstimate* out);
   void adopt_corrections();
   void apply_correction(const LoopCorrection& c);
-  void offer_to_loop(const Keyframe& kf, uint32_t reference_id, const PoseEstimate& pose,
-                     bool after_reset);
+  void offer_to_loop(const Keyframe& kf, const KeyframeLink& link);
+  void offer_reuse_to_loop(const Attempt& left, const Attempt& taken);
+  // The link of a keyframe at T_w_c tracked against the reference with this information.
+  KeyframeLink odometry_link(const SE3& T_w_c, const Matrix6d& tracker_information) const;
+  KeyframeLink restart_link() const;
   SE3 predict_pose(int64_t t_ns) const;
   Keyframe* keyframe_from_last_valid_frame();
   void accept(const Attempt& a, const SensorFrame& frame, PoseEstimate* out);
   void on_lost(const SensorFrame& frame, uint32_t failed, PoseEstimate* out);
-  void start_keyframe(int64_t timestamp_ns, const SE3& T_w_c, PoseEstimate* out,
-                      bool after_reset = false);
+  void start_keyframe(int64_t timestamp_ns, const SE3& T_w_c, const KeyframeLink& link,
+                      PoseEstimate* out);
   void offer_to_mapper(const PoseEstimate& pose, bool new_keyframe);
   void propagate_map(const SE3& T_w_c);
   void adopt_map(Keyframe* kf);
@@ -109,8 +122,7 @@ class TrackingPipeline {
   CorrectionQueue* corrections_ = nullptr;
   PlaceStore* places_ = nullptr;
   const Vocabulary* vocabulary_ = nullptr;
-  PlaceRecognizer relocaliser_;
-  VerificationLimits relocalisation_limits_;
+  Relocaliser relocaliser_;
   uint32_t corrections_adopted_ = 0;
   uint32_t pending_flags_ = 0;     // for the next output: a correction moved the map
   int64_t withhold_until_ns_ = 0;  // poses up to this time are tracked but not reported valid
@@ -127,6 +139,7 @@ class TrackingPipeline {
   Vector6d velocity_ = Vector6d::Zero();
   bool has_last_ = false;
   bool previous_valid_ = false;  // the frame before this one was valid
+  int64_t lost_since_ns_ = -1;   // the first lost frame of the current loss; -1 when tracking
   ReferenceScales typical_;      // slow averages over healthy frames
   uint32_t reset_counter_ = 0;
   TrackingCounters counters_;
