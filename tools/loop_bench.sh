@@ -1,14 +1,14 @@
 #!/usr/bin/env bash
-# Loop closure and relocalisation, the figures of the loop-closure issue (all frames unless
-# said; false-valid as in rgbdtam eval; "final map" = every tracked frame placed on its keyframe
-# as the map has it at the end, after every loop closure):
-#   - kidnapping: fr1_xyz with frames 300.. cut (30, 60, 100, 150), with and without loop
-#     closure, and with a vocabulary trained on fr3_teddy_200 alone (held out);
-#   - a restart joined by a loop: the 100-frame cut without relocalisation;
-#   - revisit: fr1_xyz forwards then backwards, with and without loop closure, and with map
-#     reuse off so that loop closure has to do the work;
-#   - place recognition's precision and recall on every sequence;
-#   - costs: vocabulary, features, query, pose graph, memory.
+# Loop closure and relocalisation, the figures of the README's section (all frames unless said;
+# false-valid as in rgbdtam eval; "final map" = every tracked frame placed on its keyframe as the
+# map has it at the end, after every correction):
+#   - kidnapping: fr1_xyz with 30, 60, 100 and 150 frames cut at frames 150, 300, 450 and 600:
+#     how many frames after the gap the first valid pose came, and how (relocalised, tracked);
+#   - a restart joined by a revisit: 150 frames cut at 150 without relocalisation;
+#   - place recognition by appearance alone, with the shipped vocabulary and with one trained
+#     without fr1_xyz (held out);
+#   - costs: vocabulary, features, query, view alignment, pose graph, memory.
+# The revisit table (recall and precision of the keyframe graph's edges) is tools/loop_recall.sh.
 #   tools/loop_bench.sh      (TUM data: ../shared/data/tum or RGBDTAM_TUM)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -20,33 +20,47 @@ tum=${RGBDTAM_TUM:-../shared/data/tum}
 [ -d "$tum/fr1_xyz" ] && [ -d "$tum/fr3_teddy_200" ] || { echo "no TUM data at $tum (set RGBDTAM_TUM)" >&2; exit 1; }
 cache=build/stress
 mkdir -p "$cache"
-for n in 30 60 100 150; do
-  [ -d "$cache/xyz_cut$n" ] || "$stress" cut "$tum/fr1_xyz" "$cache/xyz_cut$n" 300 "$n" >/dev/null
+fr1=config/tum_fr1.conf
+for at in 150 300 450 600; do
+  for n in 30 60 100 150; do
+    [ -d "$cache/xyz_cut${at}_$n" ] || "$stress" cut "$tum/fr1_xyz" "$cache/xyz_cut${at}_$n" "$at" "$n" >/dev/null
+  done
 done
-[ -d "$cache/xyz_there_and_back" ] ||
-  "$stress" there-and-back "$tum/fr1_xyz" "$cache/xyz_there_and_back" --config config/tum_fr1.conf >/dev/null
-held_out=$cache/teddy-only.voc
-[ -f "$held_out" ] ||
-  "$bin" vocabulary train "$tum/fr3_teddy_200" --config config/tum_fr3.conf --out "$held_out" >/dev/null
-
-run() {  # label sequence config [--set ...]
-  local label=$1 seq=$2 config=$3; shift 3
-  echo "## $label"
-  "$bench" replay "$seq" --config "$config" "$@" | sed 's/^/    /'
+[ -d "$cache/xyz_blur30" ] ||
+  "$stress" blur "$tum/fr1_xyz" "$cache/xyz_blur30" --config $fr1 --exposure-ms 30 >/dev/null
+held_out=$cache/without-fr1_xyz.voc
+[ -f "$held_out" ] || {
+  [ -d "$cache/pan90" ] || "$stress" pan "$cache/pan90" --peak-deg-s 90 >/dev/null
+  [ -d "$cache/plain_room" ] || "$stress" degenerate "$cache/plain_room" --scene room --frames 188 >/dev/null
+  "$bin" vocabulary train "$tum/fr3_teddy_200" "$cache/pan90" "$cache/plain_room" --config $fr1 \
+    --every 3 --augment --out "$held_out" >/dev/null
 }
-for n in 30 60 100 150; do
-  run "fr1_xyz, frames 300-$((299 + n)) cut: loop closure off" "$cache/xyz_cut$n" config/tum_fr1.conf --set loop.enabled=false
-  run "fr1_xyz, frames 300-$((299 + n)) cut: loop closure on" "$cache/xyz_cut$n" config/tum_fr1.conf
-  run "fr1_xyz, frames 300-$((299 + n)) cut: held-out vocabulary (fr3_teddy_200 only)" "$cache/xyz_cut$n" config/tum_fr1.conf --set "loop.vocabulary=$held_out"
+
+echo "## kidnapping: fr1_xyz with frames cut (loop closure off: ATE; on: ATE, coverage, false-valid, the first valid pose after the gap)"
+echo "| cut | loop off: ATE cm | loop on: ATE cm | coverage | false-valid | after the gap |"
+echo "|---|---|---|---|---|---|"
+for at in 150 300 450 600; do
+  for n in 30 60 100 150; do
+    seq=$cache/xyz_cut${at}_$n
+    off=$("$bench" replay "$seq" --config $fr1 --set loop.enabled=false | sed -n 's/^live: ATE \([0-9.]*\) cm.*/\1/p')
+    on=$("$bench" replay "$seq" --config $fr1)
+    live=$(printf '%s\n' "$on" | grep '^live:')
+    gap=$(printf '%s\n' "$on" | sed -n 's/^outage of [0-9.]* s: //p')
+    printf '| %d at %d | %s | %s | %s | %s | %s |\n' "$n" "$at" "$off" \
+      "$(printf '%s' "$live" | sed 's/^live: ATE \([0-9.]*\) cm.*/\1/')" \
+      "$(printf '%s' "$live" | sed 's/.*coverage \([0-9.]* %\).*/\1/')" \
+      "$(printf '%s' "$live" | sed 's/.*false-valid \([0-9]* of [0-9]*\);.*/\1/')" "$gap"
+  done
 done
-run "fr1_xyz, frames 300-399 cut, no relocalisation: the restart joined by a loop" "$cache/xyz_cut100" config/tum_fr1.conf --set loop.relocalise=false
-run "fr1_xyz there and back: loop closure off" "$cache/xyz_there_and_back" config/tum_fr1.conf --set loop.enabled=false
-run "fr1_xyz there and back: loop closure on" "$cache/xyz_there_and_back" config/tum_fr1.conf
-run "fr1_xyz there and back, no map reuse: loop closure off" "$cache/xyz_there_and_back" config/tum_fr1.conf --set loop.enabled=false --set map.reuse_candidates=0
-run "fr1_xyz there and back, no map reuse: loop closure on" "$cache/xyz_there_and_back" config/tum_fr1.conf --set map.reuse_candidates=0
-run "fr1_xyz" "$tum/fr1_xyz" config/tum_fr1.conf
-run "fr1_xyz, no map reuse" "$tum/fr1_xyz" config/tum_fr1.conf --set map.reuse_candidates=0
-run "fr3_teddy_200" "$tum/fr3_teddy_200" config/tum_fr3.conf
-run "fr3_teddy_200, no map reuse" "$tum/fr3_teddy_200" config/tum_fr3.conf --set map.reuse_candidates=0
+echo "## fr1_xyz, 150 frames cut at 150, no relocalisation: the restart joined by a revisit"
+"$bench" replay "$cache/xyz_cut150_150" --config $fr1 --set loop.relocalise=false | grep -v '^  wrong' | sed 's/^/    /'
+echo "## place recognition by appearance alone (recall of revisits among the best places)"
+for voc in "$(sed -n 's/^loop.vocabulary *= *//p' $fr1 | cut -d' ' -f1)" "$held_out"; do
+  for seq in "$tum/fr1_xyz" "$cache/xyz_blur30"; do
+    path=$voc
+    [ "${path#/}" = "$path" ] && [ "$voc" != "$held_out" ] && path=$PWD/config/$voc
+    "$bench" bow "$seq" --config $fr1 --set "loop.vocabulary=$path" | sed "s|$PWD/||g; s/^/    /"
+  done
+done
 echo "## costs (this machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs))"
-"$bench" costs "$tum/fr1_xyz" --config config/tum_fr1.conf | sed 's/^/    /'
+"$bench" costs "$tum/fr1_xyz" --config $fr1 | sed 's/^/    /'

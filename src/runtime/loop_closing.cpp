@@ -126,16 +126,17 @@ void LoopModule::add_keyframe(const LoopKeyframe& keyframe) {
     reference = query - 1;
     measured = EdgeKind::kRestart;
   }
-  bool correct = false;
   if (reference >= 0) {
+    // Its pose came from this measurement, so the map agrees with it.
     const bool known = measured != EdgeKind::kRestart;
     const SE3 T_ref_k =
         known ? keyframe.T_reference_keyframe : store_->in_order(reference).T_w_k.inverse() * T_w_k;
-    correct |=
-        add_edge({store_->handle(reference), query_handle, T_ref_k,
-                  known ? keyframe.information : kUnknownRelationInformation * Matrix6d::Identity(),
-                  measured});
+    (void)add_edge(
+        {store_->handle(reference), query_handle, T_ref_k,
+         known ? keyframe.information : kUnknownRelationInformation * Matrix6d::Identity(),
+         measured});
   }
+  bool correct = false;
   measure_hops(query_handle.slot);
   PlaceCandidate candidates[CandidateBudget::kTotal];
   const int n = choose_candidates(query_handle.slot, candidates);

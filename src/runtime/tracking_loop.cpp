@@ -32,13 +32,16 @@ TrackingPipeline::KeyframeLink TrackingPipeline::restart_link() const {
   return link;
 }
 
-void TrackingPipeline::offer_to_loop(const Keyframe& kf, const KeyframeLink& link) {
-  if (loop_queue_ == nullptr) return;
+LoopKeyframe* TrackingPipeline::loop_slot() {
+  if (loop_queue_ == nullptr) return nullptr;
   LoopKeyframe* slot = loop_queue_->begin_push();
-  if (slot == nullptr) {
-    ++counters_.loop_dropped_keyframes;
-    return;
-  }
+  if (slot == nullptr) ++counters_.loop_dropped_keyframes;
+  return slot;
+}
+
+void TrackingPipeline::offer_to_loop(const Keyframe& kf, const KeyframeLink& link) {
+  LoopKeyframe* slot = loop_slot();
+  if (slot == nullptr) return;
   slot->kind = LoopKeyframe::Kind::kKeyframe;
   slot->keyframe_id = kf.id;
   slot->reference_id = link.reference_id;
@@ -56,12 +59,8 @@ void TrackingPipeline::offer_to_loop(const Keyframe& kf, const KeyframeLink& lin
 }
 
 void TrackingPipeline::offer_reuse_to_loop(const Attempt& left, const Attempt& taken) {
-  if (loop_queue_ == nullptr) return;
-  LoopKeyframe* slot = loop_queue_->begin_push();
-  if (slot == nullptr) {
-    ++counters_.loop_dropped_keyframes;
-    return;
-  }
+  LoopKeyframe* slot = loop_slot();
+  if (slot == nullptr) return;
   // The frame was tracked against both: T_left_taken = T_left_c T_taken_c^-1.
   const SE3& T_left_c = left.r.T_k_c;
   const SE3& T_taken_c = taken.r.T_k_c;

@@ -82,14 +82,25 @@ TEST(Allocations, NoneWhileTrackingTheClipAfterInit) {
       calls, job.source().png_arena_high_water());
 }
 
-TEST(Allocations, NoneWithTheMapperSynchronousOrOnItsOwnThread) {
-  for (const char* mode : {"map.threaded=false", "map.threaded=true"}) {
+TEST(Allocations, NoneWithTheMapperAndLoopModuleSynchronousOrOnTheirOwnThreads) {
+  // Every thread's allocations are counted: the loop module's memory is fixed at init too, as
+  // it aligns views, adds edges and measures the graph.
+  struct Modes {
+    const char* map;
+    const char* loop;
+  };
+  for (const Modes modes : {Modes{"map.threaded=false", "loop.threaded=false"},
+                            Modes{"map.threaded=true", "loop.threaded=true"}}) {
+    const char* mode = modes.map;
+    const char* loop_mode = modes.loop;
     ReplayJob job;
-    const long calls = count_allocations_after_init({"map.enabled=true", mode}, &job);
+    const long calls = count_allocations_after_init({"map.enabled=true", mode, loop_mode}, &job);
     EXPECT_GT(job.mapper().counters().keyframes_mapped, 0u) << mode;
+    EXPECT_GT(job.loop().counters().candidates, 0u) << loop_mode << ": views aligned";
     EXPECT_EQ(calls, 0) << mode << ": " << g_bytes.load() << " bytes allocated after init";
-    std::printf("%s: %u keyframes mapped, %ld allocations after init\n", mode,
-                job.mapper().counters().keyframes_mapped, calls);
+    std::printf("%s, %s: %u keyframes mapped, %u views aligned, %ld allocations after init\n", mode,
+                loop_mode, job.mapper().counters().keyframes_mapped,
+                job.loop().counters().candidates, calls);
   }
 }
 

@@ -32,7 +32,7 @@ struct TrackingCounters {
   uint32_t relocalised_on_new_keyframe = 0;  // ... at a place whose dense keyframe is gone
   uint32_t loop_corrections = 0;             // loop closures adopted
   uint32_t withheld = 0;                     // tracked frames not reported valid after a correction
-  uint32_t loop_dropped_keyframes = 0;       // the loop queue was full: not remembered as places
+  uint32_t loop_dropped_keyframes = 0;  // the loop queue was full: not remembered (or a reuse lost)
 };
 
 class TrackingPipeline {
@@ -82,6 +82,8 @@ class TrackingPipeline {
   bool relocalise(const SensorFrame& frame, PoseEstimate* out);
   void adopt_corrections();
   void apply_correction(const LoopCorrection& c);
+  // A free slot of the loop module's queue, or null (no loop module, or full: counted).
+  LoopKeyframe* loop_slot();
   void offer_to_loop(const Keyframe& kf, const KeyframeLink& link);
   void offer_reuse_to_loop(const Attempt& left, const Attempt& taken);
   // The link of a keyframe at T_w_c tracked against the reference with this information.
