@@ -59,7 +59,7 @@ for voc in "$(sed -n 's/^loop.vocabulary *= *//p' $fr1 | cut -d' ' -f1)" "$held_
   for seq in "$tum/fr1_xyz" "$cache/xyz_blur30"; do
     path=$voc
     [ "${path#/}" = "$path" ] && [ "$voc" != "$held_out" ] && path=$PWD/config/$voc
-    "$bench" bow "$seq" --config $fr1 --set "loop.vocabulary=$path" | sed "s|$PWD/||g; s/^/    /"
+    "$bench" bow "$seq" --config $fr1 --set "loop.vocabulary=$path" | sed "s|$PWD/||g; s|config/\.\./||g; s/^/    /"
   done
 done
 echo "## costs (this machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs))"
