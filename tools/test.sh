@@ -60,4 +60,11 @@ for board in host-emulation raspberry-pi-4 radxa-rock-5b; do
   dir=build
   [ "$preset" = host-release ] || dir=build/$preset
   echo "$board ($preset): $(file -b "$dir/bin/rgbdtam" | cut -d, -f1-2,4)"
+  # Run as its tests run (under qemu when cross-built).
+  ctest --preset "$preset" -R '^BoardBuild\.TheVersion' -V | sed -n 's/^[0-9]*: \(rgbdtam [0-9].*\)/  \1/p'
+  # Assertion messages and debug info name files relative to the repository.
+  if grep -q -a -F "$PWD/" "$dir/bin/rgbdtam"; then
+    echo "$dir/bin/rgbdtam names this machine's folder $PWD" >&2
+    exit 1
+  fi
 done

@@ -12,6 +12,7 @@
 #include <memory>
 #include <string>
 
+#include "build_id.h"
 #include "config_files.hpp"
 #include "evaluate_command.hpp"
 #include "record_job.hpp"
@@ -40,6 +41,7 @@ void usage() {
       "  rgbdtam record --board <board-folder> <out-dir> [--board-set key=value]...\n"
       "                 [--max-frames N]\n"
       "  rgbdtam vocabulary train <sequence-dir>... --config <file> --out <file>\n"
+      "  rgbdtam --version\n"
       "sensor backends in this build: " RGBDTAM_HAL_BACKENDS "\n");
 }
 
@@ -107,45 +109,90 @@ int params_command(int argc, char** argv) {
   return 0;
 }
 
-// True (after saying so) when writing `output` would replace one of the run's inputs: its
-// config, the sequence's lists, or an existing file in its image folders.
-bool replaces_an_input(const char* option, const char* output, const char* config,
-                       const std::string& sequence) {
-  struct stat out;
-  if (output == nullptr || ::stat(output, &out) != 0) return false;  // a new file replaces nothing
-  auto same = [&](const std::string& path) {
-    struct stat st;
-    return ::stat(path.c_str(), &st) == 0 && st.st_dev == out.st_dev && st.st_ino == out.st_ino;
-  };
-  const std::string inputs[] = {config != nullptr ? config : "", sequence + "/rgb.txt",
-                                sequence + "/depth.txt", sequence + "/groundtruth.txt"};
-  for (const std::string& input : inputs) {
-    if (!input.empty() && same(input)) {
-      std::fprintf(stderr, "rgbdtam replay: %s %s is an input of this run (%s)\n", option, output,
-                   input.c_str());
-      return true;
+// Where an output will be: its folder resolved (links, "..") and its name; empty when the
+// folder does not exist (the open will say so).
+std::string resolved_output(const char* path) {
+  const std::string p = path;
+  const size_t slash = p.find_last_of('/');
+  const std::string folder =
+      slash == std::string::npos ? "." : p.substr(0, std::max<size_t>(slash, 1));
+  char real[PATH_MAX];
+  if (::realpath(folder.c_str(), real) == nullptr) return "";
+  return std::string(real) + "/" + (slash == std::string::npos ? p : p.substr(slash + 1));
+}
+
+bool same_file(const std::string& a, const struct stat& b) {
+  struct stat st;
+  return ::stat(a.c_str(), &st) == 0 && st.st_dev == b.st_dev && st.st_ino == b.st_ino;
+}
+
+// True (after saying so) when writing an output would replace a file the run reads (the config,
+// the vocabulary it names, the sequence's lists or images) or another output of the run.
+struct NamedOutput {
+  const char* option;
+  const char* path;
+};
+bool outputs_clash(const NamedOutput* outputs, int count, const Params& params, const char* config,
+                   const std::string& sequence) {
+  const std::string inputs[] = {config, params.loop.enabled ? params.loop.vocabulary : "",
+                                sequence + "/rgb.txt", sequence + "/depth.txt",
+                                sequence + "/groundtruth.txt"};
+  for (int i = 0; i < count; ++i) {
+    const NamedOutput& o = outputs[i];
+    if (o.path == nullptr) continue;
+    for (int j = 0; j < i; ++j) {
+      if (outputs[j].path != nullptr && !resolved_output(o.path).empty() &&
+          resolved_output(o.path) == resolved_output(outputs[j].path)) {
+        std::fprintf(stderr, "rgbdtam replay: %s and %s name one file (%s): give each its own\n",
+                     outputs[j].option, o.option, o.path);
+        return true;
+      }
     }
-  }
-  const std::string path = output;
-  const size_t slash = path.find_last_of('/');
-  const std::string parent =
-      slash == std::string::npos ? "." : path.substr(0, std::max<size_t>(slash, 1));
-  struct stat dir;
-  for (const char* images : {"/rgb", "/depth"}) {
-    struct stat st;
-    if (::stat((sequence + images).c_str(), &st) == 0 && ::stat(parent.c_str(), &dir) == 0 &&
-        st.st_dev == dir.st_dev && st.st_ino == dir.st_ino) {
-      std::fprintf(stderr, "rgbdtam replay: %s %s would replace one of the sequence's images\n",
-                   option, output);
-      return true;
+    struct stat out;
+    if (::stat(o.path, &out) != 0) continue;  // a new file replaces nothing
+    for (const std::string& input : inputs) {
+      if (!input.empty() && same_file(input, out)) {
+        std::fprintf(stderr, "rgbdtam replay: %s %s is an input of this run (%s)\n", o.option,
+                     o.path, input.c_str());
+        return true;
+      }
+    }
+    const std::string output = o.path;
+    const size_t slash = output.find_last_of('/');
+    const std::string parent =
+        slash == std::string::npos ? "." : output.substr(0, std::max<size_t>(slash, 1));
+    struct stat dir;
+    if (::stat(parent.c_str(), &dir) != 0) continue;
+    for (const char* images : {"/rgb", "/depth"}) {
+      if (same_file(sequence + images, dir)) {
+        std::fprintf(stderr, "rgbdtam replay: %s %s would replace one of the sequence's images\n",
+                     o.option, o.path);
+        return true;
+      }
     }
   }
   return false;
 }
 
+// Ctrl-C, a kill and a dropped SSH session alike end a job after the current frame, with every
+// output complete; one that comes during init ends the job as soon as it starts. Each job's
+// request_stop is an atomic store: signal-safe.
+volatile std::sig_atomic_t g_stop_requested = 0;
 ReplayJob* g_replaying = nullptr;
-void stop_replay(int) {
+RunJob* g_running = nullptr;
+RecordJob* g_recording = nullptr;
+void on_stop_signal(int) {
+  g_stop_requested = 1;
   if (g_replaying != nullptr) g_replaying->request_stop();
+  if (g_running != nullptr) g_running->request_stop();
+  if (g_recording != nullptr) g_recording->request_stop();
+}
+
+// Makes `job` the one a signal stops, and stops it at once if a signal came before.
+template <typename Job>
+void stop_on_signal(Job* job, Job** slot) {
+  *slot = job;
+  if (g_stop_requested) job->request_stop();
 }
 
 int replay_command(int argc, char** argv) {
@@ -180,40 +227,30 @@ int replay_command(int argc, char** argv) {
     usage();
     return 2;
   }
-  if (replaces_an_input("--trajectory", options.trajectory_path, c.config, options.sequence) ||
-      replaces_an_input("--final-trajectory", options.final_trajectory_path, c.config,
-                        options.sequence) ||
-      replaces_an_input("--map", map_path, c.config, options.sequence)) {
-    return 2;
-  }
   Status s = load_params(c, &options.params);
   if (!s.is_ok()) {
     std::fprintf(stderr, "rgbdtam replay: %s\n", s.message());
     return 1;
   }
-  auto ply = std::make_unique<PlyMapWriter>();
-  if (map_path != nullptr) {
-    if (!options.params.map_enabled) {
-      std::fprintf(stderr, "rgbdtam replay: --map needs map.enabled = true\n");
-      return 2;
-    }
-    s = ply->open(map_path);
-    if (!s.is_ok()) {
-      std::fprintf(stderr, "rgbdtam replay: %s\n", s.message());
-      return 1;
-    }
-    options.map_sink = ply.get();
+  const NamedOutput outputs[] = {{"--trajectory", options.trajectory_path},
+                                 {"--final-trajectory", options.final_trajectory_path},
+                                 {"--map", map_path}};
+  if (outputs_clash(outputs, 3, options.params, c.config, options.sequence)) return 2;
+  if (map_path != nullptr && !options.params.map_enabled) {
+    std::fprintf(stderr, "rgbdtam replay: --map needs map.enabled = true\n");
+    return 2;
   }
+  auto ply = std::make_unique<PlyMapWriter>();
+  if (map_path != nullptr) options.map_sink = ply.get();
   auto job = std::make_unique<ReplayJob>();
   s = job->init(options);
+  // The map file is created only once the run can start: a run that fails at init leaves nothing.
+  if (s.is_ok() && map_path != nullptr) s = ply->open(map_path);
   if (!s.is_ok()) {
     std::fprintf(stderr, "rgbdtam replay: %s\n", s.message());
     return 1;
   }
-  // Ctrl-C ends the replay after the current frame, with every output complete.
-  g_replaying = job.get();
-  std::signal(SIGINT, stop_replay);
-  std::signal(SIGTERM, stop_replay);
+  stop_on_signal(job.get(), &g_replaying);
   while (job->step() && ply->status().is_ok()) {
   }
   s = job->finish();
@@ -270,14 +307,6 @@ int replay_command(int argc, char** argv) {
   return s.is_ok() ? 0 : 1;
 }
 
-// The job that Ctrl-C stops (request_stop is an atomic store: signal-safe).
-RunJob* g_running = nullptr;
-RecordJob* g_recording = nullptr;
-void on_signal(int) {
-  if (g_running != nullptr) g_running->request_stop();
-  if (g_recording != nullptr) g_recording->request_stop();
-}
-
 // Options shared by run and record; positional arguments are left to the caller (null when
 // there is none). False on an unknown argument.
 bool parse_run_options(int argc, char** argv, RunOptions* options, const char** positional,
@@ -317,9 +346,7 @@ int run_command(int argc, char** argv) {
     std::fprintf(stderr, "rgbdtam run: %s\n", s.message());
     return 1;
   }
-  g_running = job.get();
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
+  stop_on_signal(job.get(), &g_running);
   while (job->step()) {
   }
   job->finish();
@@ -366,9 +393,7 @@ int record_command(int argc, char** argv) {
     std::fprintf(stderr, "rgbdtam record: %s\n", s.message());
     return 1;
   }
-  g_recording = job.get();
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
+  stop_on_signal(job.get(), &g_recording);
   while (job->step()) {
   }
   s = job->finish();
@@ -389,7 +414,14 @@ int main(int argc, char** argv) {
     rgbdtam::usage();
     return 2;
   }
+  // Over a file-size limit a write fails with EFBIG, reported with the file's name as a full
+  // disk is, instead of the process dying silently.
+  std::signal(SIGXFSZ, SIG_IGN);
   const char* verb = argv[1];
+  for (const char* job : {"replay", "run", "record"}) {
+    if (std::strcmp(verb, job) != 0) continue;
+    for (const int stop : {SIGINT, SIGTERM, SIGHUP}) std::signal(stop, rgbdtam::on_stop_signal);
+  }
   if (std::strcmp(verb, "replay") == 0) return rgbdtam::replay_command(argc - 2, argv + 2);
   if (std::strcmp(verb, "eval") == 0) return rgbdtam::evaluate_command(argc - 2, argv + 2);
   if (std::strcmp(verb, "params") == 0) return rgbdtam::params_command(argc - 2, argv + 2);
@@ -398,6 +430,14 @@ int main(int argc, char** argv) {
   if (std::strcmp(verb, "check") == 0) return rgbdtam::check_command(argc - 2, argv + 2);
   if (std::strcmp(verb, "vocabulary") == 0) {
     return rgbdtam::vocabulary_command(argc - 2, argv + 2);
+  }
+  if (std::strcmp(verb, "--version") == 0) {
+    std::printf(
+        "rgbdtam %s, commit %s, built for board %s; sensor backends: %s\n"
+        "Licensed under the Apache License 2.0 (LICENSE); the libraries linked into it and "
+        "their terms: NOTICE\n",
+        RGBDTAM_VERSION, RGBDTAM_COMMIT, RGBDTAM_BUILD_BOARD, RGBDTAM_HAL_BACKENDS);
+    return 0;
   }
   if (std::strcmp(verb, "--help") == 0 || std::strcmp(verb, "help") == 0) {
     rgbdtam::usage();

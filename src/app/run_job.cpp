@@ -297,11 +297,16 @@ void RunJob::print_summary() const {
               board_.sensor_kind, board_.sensor_fps, board_.link_kind,
               std::strcmp(board_.link_kind, "udp") == 0 ? board_.link_udp_remote
                                                         : board_.link_serial_device);
+  char withheld[96] = "";
+  if (c.sensor_texts_withheld > 0) {
+    std::snprintf(withheld, sizeof(withheld), " (%u not posted: the outage was reported lately)",
+                  c.sensor_texts_withheld);
+  }
   std::printf(
-      "frames: %u in %.1f s (%.1f Hz); tracked %u, lost %u; sensor errors %u (%u not posted: "
-      "the outage was reported lately), dropped (newest kept) %u\n",
+      "frames: %u in %.1f s (%.1f Hz); tracked %u, lost %u; sensor errors %u%s, dropped (newest "
+      "kept) %u\n",
       c.frames, seconds, seconds > 0 ? c.frames / seconds : 0.0, c.tracked, c.lost, c.sensor_errors,
-      c.sensor_texts_withheld, sensor_.live->dropped());
+      withheld, sensor_.live->dropped());
   const RecoveryCounters& r = sensor_.recovery.counters();
   std::printf(
       "sensor recovery: %u stalls, %u USB resets (%u failed), %u reopens (%u failed), %u "

@@ -69,6 +69,16 @@ double tick_step(double range) {
   return 10 * magnitude;
 }
 
+// Ticks from 0 over [0, range]; none for a range that is not a positive finite number (a
+// hostile trajectory's), and never more than a handful, however the steps round.
+std::vector<double> ticks(double range) {
+  std::vector<double> out;
+  if (!std::isfinite(range) || range <= 0) return out;
+  const double step = tick_step(range);
+  for (int i = 0; i <= 10 && i * step <= range + 1e-9; ++i) out.push_back(i * step);
+  return out;
+}
+
 // Polylines of points, broken wherever `broken(i)` says point i starts a new piece.
 template <typename Point, typename Broken>
 std::string polylines(const std::vector<Point>& points, Broken broken, const char* colour,
@@ -86,6 +96,10 @@ std::string polylines(const std::vector<Point>& points, Broken broken, const cha
   };
   for (size_t i = 0; i < points.size(); ++i) {
     if (i > 0 && broken(i)) flush();
+    if (!points[i].allFinite()) {  // off any scale: the line breaks there
+      flush();
+      continue;
+    }
     piece += format("%.1f,%.1f ", points[i].x(), points[i].y());
     ++count;
   }
@@ -171,12 +185,14 @@ std::string trajectory_svg(const PlotInput& in) {
   Eigen::Vector2d lo(1e300, 1e300), hi(-1e300, -1e300);
   for (const auto* points : {&gt_plane, &est_plane}) {
     for (const Eigen::Vector2d& p : *points) {
+      if (!p.allFinite()) continue;
       lo = lo.cwiseMin(p);
       hi = hi.cwiseMax(p);
     }
   }
   // One scale for both axes, centred, 5 % margin.
-  const double span = std::max({hi.x() - lo.x(), hi.y() - lo.y(), 1e-3}) * 1.1;
+  double span = std::max({hi.x() - lo.x(), hi.y() - lo.y(), 1e-3}) * 1.1;
+  if (!std::isfinite(span)) span = 1e-3;  // nothing finite to draw, or beyond a double's range
   const Eigen::Vector2d centre = (lo + hi) / 2;
   const double side = std::min(kTopViewWidth, kPanelHeight);
   const Axis u{centre.x() - span / 2, centre.x() + span / 2, kTopViewLeft, kTopViewLeft + side};
@@ -246,6 +262,7 @@ std::string trajectory_svg(const PlotInput& in) {
                       gt[static_cast<size_t>(m.first)].T_w_c.translation())
                          .norm() *
                      100;
+    if (!std::isfinite(e)) continue;  // not drawn, as the estimate's point is not
     error_cm[static_cast<size_t>(m.second)] = e;
     max_error_cm = std::max(max_error_cm, e);
   }
@@ -263,11 +280,11 @@ std::string trajectory_svg(const PlotInput& in) {
       "<rect x=\"%.0f\" y=\"%.0f\" width=\"%.0f\" height=\"%.0f\" fill=\"none\" "
       "stroke=\"#cccccc\"/>\n",
       kErrorLeft, kPanelTop, kErrorWidth, kPanelHeight);
-  for (double t = 0, step = tick_step(t1 - t0); t <= t1 - t0 + 1e-9; t += step) {
+  for (const double t : ticks(t1 - t0)) {
     svg += format("<text x=\"%.1f\" y=\"%.0f\" text-anchor=\"middle\">%g</text>\n", x(t),
                   kPanelTop + kPanelHeight + 16, t);
   }
-  for (double e = 0, step = tick_step(max_error_cm * 1.1); e <= max_error_cm * 1.1; e += step) {
+  for (const double e : ticks(max_error_cm * 1.1)) {
     svg += format(
         "<line x1=\"%.0f\" y1=\"%.1f\" x2=\"%.0f\" y2=\"%.1f\" stroke=\"#eeeeee\"/><text "
         "x=\"%.0f\" y=\"%.1f\" text-anchor=\"end\">%g</text>\n",
@@ -292,6 +309,7 @@ std::string trajectory_svg(const PlotInput& in) {
     const auto at = std::lower_bound(est_stamps.begin(), est_stamps.end(), stamp);
     if (at == est_stamps.end()) continue;
     const size_t i = static_cast<size_t>(at - est_stamps.begin());
+    if (!est_view[i].allFinite()) continue;
     const double e = error_cm[i] < 0 ? 0 : error_cm[i];
     svg += format(
         "<circle class=\"false-valid\" cx=\"%.1f\" cy=\"%.1f\" r=\"4\" fill=\"none\" "

@@ -11,7 +11,8 @@ constexpr int kCircle[16][2] = {{0, -3}, {1, -3},  {2, -2},  {3, -1}, {3, 0},  {
                                 {-3, 0}, {-3, -1}, {-2, -2}, {-1, -3}};
 constexpr int kOrientationRadius = 15;
 constexpr int kPatternRadius = 13;
-constexpr int kBorder = kOrientationRadius + 1;
+constexpr int kBorder = kFeatureBorderPx;
+static_assert(kBorder == kOrientationRadius + 1, "the border keeps the orientation patch inside");
 constexpr int kGridColumns = 8, kGridRows = 6;
 
 // Nine or more contiguous set bits of a 16-bit circular mask.

@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <cstring>
 
+#include "rgbdtam/core/features.hpp"
 #include "rgbdtam/runtime/key_value.hpp"
 
 namespace rgbdtam {
@@ -202,6 +203,16 @@ Status check_consistency(const char* source, const Params& p) {
                          "%s: keys 'camera.width'/'camera.height' must be divisible by 8 "
                          "for the 4-level pyramid (got %dx%d)",
                          source, p.camera.width_px, p.camera.height_px);
+  }
+  // The smallest size every component takes: features keep a border on each side, and the
+  // pyramid halves three times.
+  constexpr int kMinSidePx = (2 * kFeatureBorderPx / 8 + 1) * 8;
+  if (p.camera.width_px < kMinSidePx || p.camera.height_px < kMinSidePx) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "%s: keys 'camera.width'/'camera.height' must be at least %d px (place "
+                         "recognition's features keep %d px from each border; got %dx%d)",
+                         source, kMinSidePx, kFeatureBorderPx, p.camera.width_px,
+                         p.camera.height_px);
   }
   if (p.sensor.depth_range.min_m >= p.sensor.depth_range.max_m) {
     return Status::error(StatusCode::kInvalidArgument,

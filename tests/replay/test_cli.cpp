@@ -19,26 +19,8 @@ namespace {
 
 struct Outcome {
   int exit_code = -1;
-  std::string err;
+  std::string out, err;
 };
-
-// Runs `rgbdtam <args>` through the shell; stdout is discarded, stderr kept.
-Outcome rgbdtam(const std::string& args, const std::string& wrapper = "") {
-  const std::string err_path = testing::make_temp_dir("cli_err") + "/stderr.txt";
-  const std::string command =
-      wrapper + " " RGBDTAM_BINARY " " + args + " > /dev/null 2> " + err_path;
-  const int status = std::system(command.c_str());
-  Outcome o;
-  o.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream in(err_path);
-  std::stringstream text;
-  text << in.rdbuf();
-  o.err = text.str();
-  return o;
-}
-
-std::string clip() { return testing::source_path("data/tum_fr1_xyz_clip"); }
-std::string config() { return testing::source_path("config/tum_fr1.conf"); }
 
 std::string read_all(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
@@ -46,6 +28,23 @@ std::string read_all(const std::string& path) {
   s << in.rdbuf();
   return s.str();
 }
+
+// Runs `rgbdtam <args>` through the shell (after `wrapper`, a prefix command or shell
+// statements), keeping stdout and stderr.
+Outcome rgbdtam(const std::string& args, const std::string& wrapper = "") {
+  const std::string dir = testing::make_temp_dir("cli_streams");
+  const std::string command = wrapper + " " RGBDTAM_BINARY " " + args + " > " + dir +
+                              "/stdout.txt 2> " + dir + "/stderr.txt";
+  const int status = std::system(command.c_str());
+  Outcome o;
+  o.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  o.out = read_all(dir + "/stdout.txt");
+  o.err = read_all(dir + "/stderr.txt");
+  return o;
+}
+
+std::string clip() { return testing::source_path("data/tum_fr1_xyz_clip"); }
+std::string config() { return testing::source_path("config/tum_fr1.conf"); }
 
 bool exists(const std::string& path) {
   struct stat st;
@@ -125,6 +124,63 @@ TEST(Cli, AnOutputThatIsAnInputIsRefusedAndTheInputKept) {
   EXPECT_EQ(o.exit_code, 2);
 }
 
+// Issue 23, defect 1: the vocabulary is an input too.
+TEST(Cli, AnOutputOverTheVocabularyIsRefusedAndTheVocabularyKept) {
+  const std::string dir = testing::make_temp_dir("cli_vocabulary_input");
+  const std::string voc = dir + "/words.voc";
+  ASSERT_EQ(
+      std::system(
+          ("cp " + testing::source_path("data/vocabulary/tum-k10-l4.voc") + " " + voc).c_str()),
+      0);
+  const std::string before = read_all(voc);
+  for (const char* option : {" --trajectory ", " --final-trajectory ", " --map "}) {
+    const Outcome o = rgbdtam("replay " + clip() + " --config " + config() +
+                              " --set loop.vocabulary=" + voc + option + voc);
+    EXPECT_EQ(o.exit_code, 2) << option;
+    EXPECT_NE(o.err.find("is an input of this run (" + voc + ")"), std::string::npos) << o.err;
+  }
+  EXPECT_EQ(read_all(voc), before);
+}
+
+// Issue 23, defect 6: two outputs on one path are refused before the run, and a run that fails
+// at init creates no output.
+TEST(Cli, TwoOutputsOnOnePathAreRefusedAndAFailedInitLeavesNoFile) {
+  const std::string dir = testing::make_temp_dir("cli_one_path");
+  Outcome o = rgbdtam("replay " + clip() + " --config " + config() + " --trajectory " + dir +
+                      "/x --map " + dir + "/../" + dir.substr(dir.rfind('/') + 1) + "/x");
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_NE(o.err.find("--trajectory and --map name one file"), std::string::npos) << o.err;
+  EXPECT_FALSE(exists(dir + "/x"));
+  {
+    std::ofstream bad(dir + "/bad.voc");
+    bad << "RGBDVOC1 but not really";
+  }
+  o = rgbdtam("replay " + clip() + " --config " + config() + " --set loop.vocabulary=" + dir +
+              "/bad.voc --trajectory " + dir + "/t.txt --map " + dir + "/m.ply");
+  EXPECT_EQ(o.exit_code, 1);
+  for (const char* name : {"/t.txt", "/t.txt.partial", "/m.ply", "/m.ply.partial"}) {
+    EXPECT_FALSE(exists(dir + name)) << name;
+  }
+}
+
+// Issue 23, defect 3: validation knows the smallest image every component takes.
+TEST(Cli, ACameraTooSmallIsRefusedWithItsMinimum) {
+  const Outcome o = rgbdtam("replay " + clip() + " --config " + config() + " --set camera.width=8");
+  EXPECT_EQ(o.exit_code, 1);
+  EXPECT_NE(o.err.find("must be at least 40 px"), std::string::npos) << o.err;
+  EXPECT_EQ(o.err.find("assertion failed"), std::string::npos) << o.err;
+}
+
+// Issue 23, defect 5: over a file-size limit the write fails with the file's name.
+TEST(Cli, AFileSizeLimitIsAClearErrorNotASilentDeath) {
+  const std::string dir = testing::make_temp_dir("cli_ulimit");
+  const Outcome o =
+      rgbdtam("replay " + clip() + " --config " + config() + " --map " + dir + "/m.ply --quiet",
+              "ulimit -f 16;");
+  EXPECT_EQ(o.exit_code, 1) << o.err;
+  EXPECT_NE(o.err.find("m.ply.partial: write failed: File too large"), std::string::npos) << o.err;
+}
+
 TEST(Cli, OutputsAppearWhenCompleteAndAFullDiskIsNamed) {
   const std::string dir = testing::make_temp_dir("cli_outputs");
   Outcome o = rgbdtam("replay " + clip() + " --config " + config() + " --trajectory " + dir +
@@ -146,13 +202,16 @@ TEST(Cli, NoPoseAtAllIsAFailedRun) {
   EXPECT_NE(o.err.find("no frame was tracked"), std::string::npos) << o.err;
 }
 
-TEST(Cli, CtrlCEndsAReplayWithCompleteOutputs) {
+// Ctrl-C, a kill, and (issue 23, defect 4) a dropped SSH session's SIGHUP.
+class CliStop : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(CliStop, EndsAReplayWithCompleteOutputs) {
   const std::string seq = testing::full_fr1_xyz();
   if (seq.empty()) GTEST_SKIP() << "no full fr1_xyz on this machine";
-  const std::string dir = testing::make_temp_dir("cli_sigint");
+  const std::string dir = testing::make_temp_dir("cli_stop");
   const Outcome o = rgbdtam("replay " + seq + " --config " + config() + " --trajectory " + dir +
                                 "/t.txt --map " + dir + "/m.ply",
-                            "timeout --preserve-status -s INT 2");
+                            std::string("timeout --preserve-status -s ") + GetParam() + " 2");
   EXPECT_EQ(o.exit_code, 130) << o.err;
   EXPECT_NE(o.err.find("interrupted after"), std::string::npos) << o.err;
   const std::string trajectory = read_all(dir + "/t.txt");
@@ -169,6 +228,27 @@ TEST(Cli, CtrlCEndsAReplayWithCompleteOutputs) {
   const long long count = std::atoll(ply.c_str() + count_at + 15);
   EXPECT_EQ(static_cast<long long>(ply.size() - body_at - 11), count * 15);
 }
+
+TEST_P(CliStop, EndsRunAndRecordWithTheirSummaries) {
+  const std::string seq = testing::full_fr1_xyz();
+  if (seq.empty()) GTEST_SKIP() << "no full fr1_xyz on this machine";
+  // The board plays the sequence at 30 Hz: 26 s, so the signal comes while it runs.
+  const std::string board =
+      testing::source_path("board/host-emulation") + " --board-set sensor.device=" + seq;
+  const std::string wrapper = std::string("timeout --preserve-status -s ") + GetParam() + " 3";
+  const Outcome run = rgbdtam("run --board " + board + " --quiet", wrapper);
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("frames: "), std::string::npos) << run.out;
+  // Issue 23, defect 8: no word of withheld outage messages when there was no outage.
+  EXPECT_EQ(run.out.find("not posted"), std::string::npos) << run.out;
+  const std::string dir = testing::make_temp_dir("cli_stop_record");
+  const Outcome record = rgbdtam("record --board " + board + " " + dir + "/rec", wrapper);
+  EXPECT_EQ(record.exit_code, 0) << record.err;
+  EXPECT_TRUE(exists(dir + "/rec/rgb.txt") && exists(dir + "/rec/depth.txt")) << record.err;
+  EXPECT_FALSE(exists(dir + "/rec/rgb.txt.partial")) << record.err;
+}
+
+INSTANTIATE_TEST_SUITE_P(Signals, CliStop, ::testing::Values("INT", "TERM", "HUP"));
 
 TEST(Cli, TrainingAVocabularyTwiceGivesTheSameFile) {
   const std::string dir = testing::make_temp_dir("cli_vocabulary");

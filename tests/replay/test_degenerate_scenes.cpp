@@ -67,6 +67,27 @@ void expect_never_wrong(const std::string& layout) {
   EXPECT_EQ(out.report.false_valid.count, 0) << layout;
 }
 
+// Issue 23, defect 3: the smallest camera the parameters accept (40x40) runs every module,
+// place recognition and the loop module's views included, where 8x8 used to pass validation and
+// abort in the feature extractor.
+TEST(DegenerateScenes, TheSmallestCameraAcceptedRunsEveryModule) {
+  testing::SyntheticScene scene;
+  scene.camera = {33.0, 33.0, 19.5, 19.5, 40, 40};
+  const std::string dir = testing::make_temp_dir("smallest_camera");
+  ASSERT_TRUE(testing::write_synthetic_sequence(dir, scene, 30, 30.0));
+  ASSERT_TRUE(testing::write_text(dir + "/camera.conf", testing::synthetic_config(scene)));
+  const std::string vocabulary =
+      "loop.vocabulary=" + testing::source_path("data/vocabulary/tum-k10-l4.voc");
+  const testing::ReplayOutcome out = testing::replay_and_evaluate(
+      dir, dir + "/camera.conf", {vocabulary.c_str(), "map.enabled=true"});
+  ASSERT_TRUE(out.ran);
+  EXPECT_EQ(out.counters.frames, 30u);
+  EXPECT_GT(out.loop.keyframes, 0u) << "places described at 40x40";
+  EXPECT_EQ(out.report.false_valid.count, 0);
+  std::printf("40x40: %u of %u frames tracked, %u places\n", out.counters.tracked,
+              out.counters.frames, out.loop.keyframes);
+}
+
 TEST(DegenerateScenes, APlainCorridorIsNeverReportedWrong) { expect_never_wrong("corridor"); }
 TEST(DegenerateScenes, APlainRoomIsNeverReportedWrong) { expect_never_wrong("room"); }
 

@@ -245,5 +245,30 @@ TEST(TrajectoryPlot, MarksLostStretchesAndFalseValidPosesOnThePrincipalPlane) {
   EXPECT_NEAR(hi_x - lo_x, hi_y - lo_y, 0.05 * (hi_x - lo_x));
 }
 
+// Issue 23, defect 2: one pose at x = 1e300 made the error axis infinite and its tick loop
+// endless. The plot ends, small, with no "nan" or "inf" in its numbers.
+TEST(TrajectoryPlot, AHostileTrajectoryEndsWithAFinitePlot) {
+  std::vector<StampedPose> gt, est;
+  for (int i = 0; i < 90; ++i) {
+    const double t = i / 30.0;
+    gt.push_back({t, SE3(Eigen::Quaterniond::Identity(), Vector3d(0.01 * i, 0, 0))});
+    est.push_back(gt.back());
+  }
+  for (const double absurd : {1e300, 1e200, -1e300}) {
+    est[45].T_w_c = SE3(Eigen::Quaterniond::Identity(), Vector3d(absurd, 0, 0));
+    const EvaluationReport report = evaluate_all(gt, est, nullptr);
+    PlotInput in;
+    in.gt = &gt;
+    in.est = &est;
+    in.report = &report;
+    const std::string svg = trajectory_svg(in);
+    EXPECT_NE(svg.find("</svg>\n"), std::string::npos) << absurd;
+    EXPECT_LT(svg.size(), 64u * 1024) << absurd;
+    for (const char* bad : {"nan", "inf,", "inf\""}) {
+      EXPECT_EQ(svg.find(bad), std::string::npos) << absurd << ": " << bad;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace rgbdtam

@@ -18,6 +18,10 @@ struct Descriptor {
   uint64_t bits[4] = {};
 };
 
+// Corners are looked for this far from the border (the orientation patch's radius and one), so
+// an image must be wider and higher than twice it.
+constexpr int kFeatureBorderPx = 16;
+
 inline int hamming(const Descriptor& a, const Descriptor& b) {
   return __builtin_popcountll(a.bits[0] ^ b.bits[0]) + __builtin_popcountll(a.bits[1] ^ b.bits[1]) +
          __builtin_popcountll(a.bits[2] ^ b.bits[2]) + __builtin_popcountll(a.bits[3] ^ b.bits[3]);
