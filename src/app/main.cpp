@@ -109,16 +109,17 @@ int params_command(int argc, char** argv) {
   return 0;
 }
 
+std::string folder_of(const std::string& path) {
+  const size_t slash = path.find_last_of('/');
+  return slash == std::string::npos ? "." : path.substr(0, std::max<size_t>(slash, 1));
+}
+
 // Where an output will be: its folder resolved (links, "..") and its name; empty when the
 // folder does not exist (the open will say so).
-std::string resolved_output(const char* path) {
-  const std::string p = path;
-  const size_t slash = p.find_last_of('/');
-  const std::string folder =
-      slash == std::string::npos ? "." : p.substr(0, std::max<size_t>(slash, 1));
+std::string resolved_output(const std::string& path) {
   char real[PATH_MAX];
-  if (::realpath(folder.c_str(), real) == nullptr) return "";
-  return std::string(real) + "/" + (slash == std::string::npos ? p : p.substr(slash + 1));
+  if (::realpath(folder_of(path).c_str(), real) == nullptr) return "";
+  return std::string(real) + "/" + path.substr(path.find_last_of('/') + 1);
 }
 
 bool same_file(const std::string& a, const struct stat& b) {
@@ -126,12 +127,13 @@ bool same_file(const std::string& a, const struct stat& b) {
   return ::stat(a.c_str(), &st) == 0 && st.st_dev == b.st_dev && st.st_ino == b.st_ino;
 }
 
-// True (after saying so) when writing an output would replace a file the run reads (the config,
-// the vocabulary it names, the sequence's lists or images) or another output of the run.
 struct NamedOutput {
   const char* option;
   const char* path;
 };
+
+// True (after saying so) when writing an output would replace a file the run reads (the config,
+// the vocabulary it names, the sequence's lists or images) or another output of the run.
 bool outputs_clash(const NamedOutput* outputs, int count, const Params& params, const char* config,
                    const std::string& sequence) {
   const std::string inputs[] = {config, params.loop.enabled ? params.loop.vocabulary : "",
@@ -157,12 +159,8 @@ bool outputs_clash(const NamedOutput* outputs, int count, const Params& params, 
         return true;
       }
     }
-    const std::string output = o.path;
-    const size_t slash = output.find_last_of('/');
-    const std::string parent =
-        slash == std::string::npos ? "." : output.substr(0, std::max<size_t>(slash, 1));
     struct stat dir;
-    if (::stat(parent.c_str(), &dir) != 0) continue;
+    if (::stat(folder_of(o.path).c_str(), &dir) != 0) continue;
     for (const char* images : {"/rgb", "/depth"}) {
       if (same_file(sequence + images, dir)) {
         std::fprintf(stderr, "rgbdtam replay: %s %s would replace one of the sequence's images\n",

@@ -5,6 +5,7 @@
 
 #include "config_files.hpp"
 #include "json_line.hpp"
+#include "loop_summary.hpp"
 #include "memory_budget.hpp"
 #include "rgbdtam/hal/clock.hpp"
 #include "rgbdtam/runtime/pose_link.hpp"
@@ -158,20 +159,7 @@ void ReplayJob::print_summary() const {
         system_.mapper().time_per_keyframe().percentile_ms(0.5),
         system_.mapper().time_per_keyframe().percentile_ms(0.95));
   }
-  if (system_.loop_enabled()) {
-    const LoopCounters& l = system_.loop().counters();
-    std::printf(
-        "loop: %u places; %u views aligned with theirs: %u revisit edges (loops), %u covisible "
-        "edges; %u reuse edges; %u corrections (%u adopted, %u dropped; %u poses withheld after "
-        "them); %u relocalised (%u on a new keyframe); %u keyframes dropped at the queue; ms "
-        "per keyframe: describe median %.1f, search median %.1f p95 %.1f, pose graph max %.1f\n",
-        l.keyframes, l.candidates, l.revisit_edges, l.covisible_edges, l.reuse_edges, l.corrections,
-        c.loop_corrections, l.corrections_dropped, c.withheld, c.relocalised,
-        c.relocalised_on_new_keyframe, c.loop_dropped_keyframes,
-        system_.loop().describe_time().percentile_ms(0.5),
-        system_.loop().search_time().percentile_ms(0.5),
-        system_.loop().search_time().percentile_ms(0.95), system_.loop().optimise_time().max_ms());
-  }
+  print_loop_summary(system_);
   std::printf("memory: %.0f MB allocated at init (half of this machine's memory is the budget)\n",
               static_cast<double>(memory_needed_bytes_) / (1 << 20));
   std::printf("tracking ms/frame: median %.2f, p95 %.2f, max %.2f\n",

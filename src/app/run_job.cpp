@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "config_files.hpp"
+#include "loop_summary.hpp"
 #include "memory_budget.hpp"
 #include "rgbdtam/hal/clock.hpp"
 #include "rgbdtam/hal/file.hpp"
@@ -324,6 +325,7 @@ void RunJob::print_summary() const {
   std::printf("mapper task ms/keyframe: median %.1f, p95 %.1f, max %.1f over %u keyframes\n",
               m.time_per_keyframe().percentile_ms(0.5), m.time_per_keyframe().percentile_ms(0.95),
               m.time_per_keyframe().max_ms(), m.counters().keyframes_mapped);
+  print_loop_summary(runtime_->slam());
   const LinkTask& l = runtime_->link();
   const PoseLinkCounters& lc = l.counters();
   const LinkCounters& tc = link_->counters();

@@ -68,6 +68,13 @@ PoseEstimate FirmwareRuntime::on_frame(const SensorFrame& frame, int64_t arrival
     pool_full_reported_ = true;
     post_event(mavlink::kMavSeverityInfo, "rgbdtam: keyframe pool full, recycling oldest");
   }
+  if (!place_store_full_reported_ && slam_.places_forgotten() > 0) {
+    place_store_full_reported_ = true;
+    char text[mavlink::kMaxStatusTextChars + 1];
+    std::snprintf(text, sizeof(text), "rgbdtam: place store full (%d), forgetting oldest",
+                  slam_.place_capacity());
+    post_event(mavlink::kMavSeverityInfo, text);
+  }
   (void)link_.post_pose(pose, arrival_ns);
   const int64_t now = clock_();
   LedState state = valid                                 ? LedState::kTracking

@@ -36,7 +36,7 @@ PlaceRecord* PlaceStore::begin_insert() {
     database_.remove(slot);
     first_ = (first_ + 1) % capacity_;
     --size_;
-    ++evicted_;
+    evicted_.fetch_add(1, std::memory_order_relaxed);
   } else {
     slot = slot_of(size_);
   }

@@ -163,6 +163,18 @@ TEST(Cli, TwoOutputsOnOnePathAreRefusedAndAFailedInitLeavesNoFile) {
   }
 }
 
+// Issue 23: the summary says what the place store forgot. Every frame of the clip a keyframe
+// into a store of 8 places: 42 of 50 forgotten, and the run still right.
+TEST(Cli, TheSummarySaysWhatThePlaceStoreForgot) {
+  const Outcome o = rgbdtam("replay " + clip() + " --config " + config() +
+                            " --set loop.places=8 --set tracker.keyframe_overlap=0.99" +
+                            " --set map.reuse_candidates=0 --quiet");
+  EXPECT_EQ(o.exit_code, 0) << o.err;
+  EXPECT_NE(o.out.find("loop: 50 places (the store keeps 8; 42 forgotten)"), std::string::npos)
+      << o.out;
+  EXPECT_NE(o.out.find("coverage: 100.0 %"), std::string::npos) << o.out;
+}
+
 // Issue 23, defect 3: validation knows the smallest image every component takes.
 TEST(Cli, ACameraTooSmallIsRefusedWithItsMinimum) {
   const Outcome o = rgbdtam("replay " + clip() + " --config " + config() + " --set camera.width=8");

@@ -158,6 +158,36 @@ TEST(Firmware, ASilentSensorIsReportedAsAStallAndItsReturnAsARecovery) {
   EXPECT_EQ(monitor.odometry, static_cast<int>(c.frames));
 }
 
+// Issue 23: what the place store forgets is visible. Every frame a keyframe (overlap 0.99, no
+// reuse) into a store of 8 places: it fills within the first second and wraps.
+TEST(Firmware, ThePlaceStoreFillingIsReportedOnceAndCounted) {
+  testing::SyntheticScene scene = testing::SyntheticScene::half_resolution();
+  scene.diagonal_path = true;
+  const std::string dir = testing::make_temp_dir("firmware_places");
+  ASSERT_TRUE(testing::write_synthetic_sequence(dir, scene, 30, 10.0));
+  ASSERT_TRUE(testing::write_text(
+      dir + "/camera.conf",
+      testing::synthetic_config(scene) +
+          "loop.vocabulary = " + testing::source_path("data/vocabulary/tum-k10-l4.voc") +
+          "\nloop.places = 8\ntracker.keyframe_overlap = 0.99\nmap.reuse_candidates = 0\n"));
+  testing::Monitor monitor;
+  RunJob job;
+  testing::run_board(
+      &monitor, &job,
+      {"sensor.device=" + dir, "sensor.config=" + dir + "/camera.conf", "sensor.fps=10"});
+  const SlamSystem& slam = job.runtime().slam();
+  const uint32_t places = slam.loop().counters().keyframes;
+  std::printf("%u places described, %u forgotten by a store of %d\n", places,
+              slam.places_forgotten(), slam.place_capacity());
+  ASSERT_GT(places, 8u) << "the store must have filled";
+  EXPECT_EQ(slam.places_forgotten(), places - 8);
+  int reported = 0;
+  for (const std::string& t : monitor.texts) {
+    reported += t == "rgbdtam: place store full (8), forgetting oldest";
+  }
+  EXPECT_EQ(reported, 1) << "once, when it first fills";
+}
+
 TEST(Firmware, StoppingDuringARecordedGapOfAYearTakesNoLongerThanAFrame) {
   // One stamp a year late used to make the sensor thread sleep a year, and Ctrl-C join it.
   testing::SyntheticScene scene = testing::SyntheticScene::half_resolution();

@@ -72,6 +72,7 @@ class FirmwareRuntime {
   FirmwareCounters counters_;
   bool lost_ = false;
   bool pool_full_reported_ = false;
+  bool place_store_full_reported_ = false;
   int64_t fault_until_ns_ = 0;  // the LED shows a fault for a while after a sensor error
   bool started_ = false;
 };

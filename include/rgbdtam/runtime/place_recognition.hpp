@@ -10,6 +10,7 @@
 // `loop.places` keyframes. Threads: the loop module writes, the tracker reads (relocalisation);
 // both under mutex().
 
+#include <atomic>
 #include <mutex>
 
 #include "rgbdtam/core/place_database.hpp"
@@ -46,7 +47,8 @@ class PlaceStore {
   void commit();
   int size() const { return size_; }
   int capacity() const { return capacity_; }
-  uint32_t evicted() const { return evicted_; }
+  // Records forgotten to make room; read from any thread (the firmware reports the first).
+  uint32_t evicted() const { return evicted_.load(std::memory_order_relaxed); }
   // Oldest first.
   PlaceRecord& in_order(int i) { return records_[slot_of(i)]; }
   const PlaceRecord& in_order(int i) const { return records_[slot_of(i)]; }
@@ -68,7 +70,7 @@ class PlaceStore {
   std::unique_ptr<PlaceRecord[]> records_;
   PlaceDatabase database_;
   int capacity_ = 0, size_ = 0, first_ = 0;
-  uint32_t evicted_ = 0;
+  std::atomic<uint32_t> evicted_{0};
 };
 
 // What a feature match must show to give a first guess of a place's pose (direct alignment of
