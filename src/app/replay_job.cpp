@@ -15,6 +15,13 @@ namespace {
 // Past this many, problems are counted in the summary but not printed one by one.
 constexpr int kMaxProblemsPrinted = 20;
 constexpr int kProgressEvery = 100;
+
+// Sized and touched at init, so that a replay's resident memory does not grow with its frames.
+template <typename T>
+void reserve_touched(std::vector<T>* v, size_t n, const T& fill) {
+  v->assign(n, fill);
+  v->clear();
+}
 }  // namespace
 
 Status ReplayJob::init(const ReplayOptions& options) {
@@ -45,10 +52,11 @@ Status ReplayJob::init(const ReplayOptions& options) {
   if (options.trajectory_path != nullptr) {
     RGBDTAM_RETURN_IF_ERROR(writer_.open(options.trajectory_path));
   }
-  estimates_.reserve(static_cast<size_t>(source_.frame_count()));
-  covariances_.reserve(static_cast<size_t>(source_.frame_count()));
-  on_keyframes_.reserve(static_cast<size_t>(source_.frame_count()));
-  final_estimates_.reserve(static_cast<size_t>(source_.frame_count()));
+  const size_t frames = static_cast<size_t>(source_.frame_count());
+  reserve_touched(&estimates_, frames, StampedPose{0.0, SE3()});
+  reserve_touched(&covariances_, frames, Eigen::Matrix<double, 6, 6>::Zero().eval());
+  reserve_touched(&on_keyframes_, frames, OnKeyframe());
+  reserve_touched(&final_estimates_, frames, StampedPose{0.0, SE3()});
   started_ns_ = monotonic_ns();
   return Status::ok();
 }

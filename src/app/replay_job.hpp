@@ -53,6 +53,7 @@ class ReplayJob {
   const MappingModule& mapper() const { return system_.mapper(); }
   bool loop_enabled() const { return system_.loop_enabled(); }
   const LoopModule& loop() const { return system_.loop(); }
+  const SlamSystem& system() const { return system_; }
 
  private:
   ReplayOptions options_;

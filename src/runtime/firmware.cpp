@@ -68,11 +68,11 @@ PoseEstimate FirmwareRuntime::on_frame(const SensorFrame& frame, int64_t arrival
     pool_full_reported_ = true;
     post_event(mavlink::kMavSeverityInfo, "rgbdtam: keyframe pool full, recycling oldest");
   }
-  if (!place_store_full_reported_ && slam_.places_forgotten() > 0) {
+  if (!place_store_full_reported_ && slam_.places().evicted() > 0) {
     place_store_full_reported_ = true;
     char text[mavlink::kMaxStatusTextChars + 1];
     std::snprintf(text, sizeof(text), "rgbdtam: place store full (%d), forgetting oldest",
-                  slam_.place_capacity());
+                  slam_.places().capacity());
     post_event(mavlink::kMavSeverityInfo, text);
   }
   (void)link_.post_pose(pose, arrival_ns);

@@ -52,7 +52,10 @@ KeyframeHandle KeyframePool::handle(const Keyframe* kf) const {
 }
 
 Keyframe* KeyframePool::get(const KeyframeHandle& h) {
-  if (h.slot < 0 || h.slot >= capacity_ || generation_[h.slot] != h.generation) return nullptr;
+  if (h.slot < 0 || h.slot >= capacity_ || generation_[h.slot] != h.generation) {
+    stale_lookups_.fetch_add(1, std::memory_order_relaxed);
+    return nullptr;
+  }
   return &slots_[h.slot];
 }
 

@@ -347,6 +347,10 @@ void LoopModule::optimise() {
     const SE3 newest_before = store_->in_order(n - 1).T_w_k;
     for (int i = 0; i < n; ++i) {
       PlaceRecord& r = store_->in_order(i);
+      if (observer_ != nullptr) {
+        observer_->on_place_moved(counters_.corrections + 1, r.keyframe_id, r.T_w_k,
+                                  graph_.pose(i));
+      }
       r.T_w_k = graph_.pose(i);
       (void)out->poses.push_back({r.keyframe_id, r.T_w_k});
     }

@@ -74,6 +74,7 @@ PlaceHandle PlaceStore::handle(int order) const {
 
 const PlaceRecord* PlaceStore::get(const PlaceHandle& h) const {
   if (h.slot < 0 || h.slot >= capacity_ || records_[h.slot].generation != h.generation) {
+    stale_lookups_.fetch_add(1, std::memory_order_relaxed);
     return nullptr;
   }
   return &records_[h.slot];

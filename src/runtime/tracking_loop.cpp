@@ -97,6 +97,8 @@ bool TrackingPipeline::relocalise(const SensorFrame& frame, PoseEstimate* out) {
     // Refined at full resolution against the place's dense keyframe, where it still is.
     adopt_map(kf);
     a = track_against(kf, T_w_c, frame.timestamp_ns);
+  } else {
+    ++counters_.relocalised_past_the_pool;
   }
   velocity_.setZero();  // none carries across a loss
   if (a.failed == 0) {

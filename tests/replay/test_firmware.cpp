@@ -30,6 +30,13 @@
 namespace rgbdtam {
 namespace {
 
+// The host-emulation board on a synthetic sequence written into dir (with dir/camera.conf).
+void run_synthetic_at_10_hz(testing::Monitor* monitor, RunJob* job, const std::string& dir) {
+  testing::run_board(
+      monitor, job,
+      {"sensor.device=" + dir, "sensor.config=" + dir + "/camera.conf", "sensor.fps=10"});
+}
+
 TEST(Firmware, HostEmulationStreamsEveryPoseAndMatchesReplay) {
   testing::Monitor monitor;
   RunJob job;
@@ -129,9 +136,7 @@ TEST(Firmware, ASilentSensorIsReportedAsAStallAndItsReturnAsARecovery) {
   delay_entries(dir + "/depth.txt", 6, 2.5);
   testing::Monitor monitor;
   RunJob job;
-  testing::run_board(
-      &monitor, &job,
-      {"sensor.device=" + dir, "sensor.config=" + dir + "/camera.conf", "sensor.fps=10"});
+  run_synthetic_at_10_hz(&monitor, &job, dir);
   const FirmwareCounters& c = job.runtime().counters();
   EXPECT_EQ(c.frames + job.sensor_dropped(), 12u) << "nothing lost to the stall";
   EXPECT_EQ(c.sensor_recoveries, 1u);
@@ -172,15 +177,13 @@ TEST(Firmware, ThePlaceStoreFillingIsReportedOnceAndCounted) {
           "\nloop.places = 8\ntracker.keyframe_overlap = 0.99\nmap.reuse_candidates = 0\n"));
   testing::Monitor monitor;
   RunJob job;
-  testing::run_board(
-      &monitor, &job,
-      {"sensor.device=" + dir, "sensor.config=" + dir + "/camera.conf", "sensor.fps=10"});
+  run_synthetic_at_10_hz(&monitor, &job, dir);
   const SlamSystem& slam = job.runtime().slam();
   const uint32_t places = slam.loop().counters().keyframes;
   std::printf("%u places described, %u forgotten by a store of %d\n", places,
-              slam.places_forgotten(), slam.place_capacity());
+              slam.places().evicted(), slam.places().capacity());
   ASSERT_GT(places, 8u) << "the store must have filled";
-  EXPECT_EQ(slam.places_forgotten(), places - 8);
+  EXPECT_EQ(slam.places().evicted(), places - 8);
   int reported = 0;
   for (const std::string& t : monitor.texts) {
     reported += t == "rgbdtam: place store full (8), forgetting oldest";
@@ -205,9 +208,7 @@ TEST(Firmware, StoppingDuringARecordedGapOfAYearTakesNoLongerThanAFrame) {
     stop_requested_ns = Clock::now().time_since_epoch().count();
     job.request_stop();
   });
-  testing::run_board(
-      &monitor, &job,
-      {"sensor.device=" + dir, "sensor.config=" + dir + "/camera.conf", "sensor.fps=10"});
+  run_synthetic_at_10_hz(&monitor, &job, dir);
   const int64_t finished_ns = Clock::now().time_since_epoch().count();
   ctrl_c.join();
   const double stop_s = (finished_ns - stop_requested_ns.load()) * 1e-9;

@@ -117,7 +117,9 @@ TEST(PlaceStore, AFullStoreForgetsTheOldestAndItsHandlesGoStale) {
   }
   EXPECT_EQ(store.size(), 4);
   EXPECT_EQ(store.evicted(), 2u);
+  EXPECT_EQ(store.stale_lookups(), 0u);
   EXPECT_EQ(store.get(first), nullptr) << "its slot holds another keyframe now";
+  EXPECT_EQ(store.stale_lookups(), 1u) << "a refused lookup is counted";
   EXPECT_EQ(store.in_order(0).keyframe_id, 20u);
   EXPECT_EQ(store.order_of(50), 3);
   EXPECT_EQ(store.order_of(10), -1);

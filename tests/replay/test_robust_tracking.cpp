@@ -131,5 +131,17 @@ TEST(RobustTracking, NoiseInGivesNoPoseOut) {
   testing::expect_tracked_or_lost(colour, "clip with noise for colour", 0.9);
 }
 
+// The clip wandered over (rgbdtam-stress wander, as the long soak's sequence is made): reversals,
+// twice the speed and jumps after outages, with every frame's ground truth carried along.
+TEST(RobustTracking, TheClipWanderedOverIsNeverFalseValid) {
+  const std::string dir = testing::make_temp_dir("clip_wander");
+  const std::string config = testing::source_path("config/tum_fr1.conf");
+  ASSERT_TRUE(testing::wander_sequence(testing::source_path("data/tum_fr1_xyz_clip"),
+                                       dir + "/wander", config, 300, 1));
+  const auto out = testing::replay_and_evaluate(dir + "/wander", config);
+  EXPECT_EQ(out.counters.frames, 300u);
+  testing::expect_tracked_or_lost(out, "the clip wandered over", 0.95);
+}
+
 }  // namespace
 }  // namespace rgbdtam

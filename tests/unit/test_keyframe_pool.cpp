@@ -47,8 +47,10 @@ TEST_F(KeyframePoolTest, AHandleToARecycledKeyframeReadsAsGone) {
   Keyframe* b = pool.acquire(a);
   pool.acquire(b);
   EXPECT_EQ(pool.acquire(b), a) << "the oldest goes";
+  EXPECT_EQ(pool.stale_lookups(), 0u);
   EXPECT_EQ(pool.get(h), nullptr) << "the eviction notice: the old handle is stale";
   EXPECT_EQ(pool.get(pool.handle(a)), a);
+  EXPECT_EQ(pool.stale_lookups(), 1u) << "the refused lookup is counted, the good one not";
 }
 
 TEST_F(KeyframePoolTest, APublishedMapIsAdoptedOnceBetweenFrames) {

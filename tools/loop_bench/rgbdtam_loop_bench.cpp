@@ -6,6 +6,8 @@
 //     vocabulary size and load time, features per keyframe, query time, pose-graph time for
 //     32, 256 and 1024 keyframes, and the light store's memory at capacity.
 // Host tool: allocates freely.
+#include <malloc.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -20,6 +22,7 @@
 #include "replay_job.hpp"
 #include "rgbdtam/core/pose_graph.hpp"
 #include "rgbdtam/hal/clock.hpp"
+#include "rgbdtam/hal/machine.hpp"
 #include "rgbdtam/hal/tum_trajectory.hpp"
 #include "rgbdtam/runtime/place_recognition.hpp"
 #include "view_study.hpp"
@@ -56,10 +59,57 @@ double median(std::vector<double> v) {
 
 struct Recorder : LoopObserver {
   std::vector<GraphEdgeEvent> edges;
+  struct Moved {
+    uint32_t correction, keyframe_id;
+    SE3 before, after;
+  };
+  std::vector<Moved> moved;
+  // What this bench keeps of the run to check it afterwards (not the system's memory).
+  size_t bytes() const {
+    return edges.capacity() * sizeof(GraphEdgeEvent) + moved.capacity() * sizeof(Moved);
+  }
   void on_edge(const GraphEdgeEvent& e) override {
     if (e.kind != EdgeKind::kRestart) edges.push_back(e);  // no measurement: no error to check
   }
+  void on_place_moved(uint32_t correction, uint32_t keyframe_id, const SE3& before,
+                      const SE3& after) override {
+    moved.push_back({correction, keyframe_id, before, after});
+  }
 };
+
+// Each correction against the ground truth: the ATE of the places it moved (at their
+// keyframes' times), before and after it.
+void check_corrections(const Recorder& recorder, const std::map<uint32_t, double>& keyframe_s,
+                       const std::vector<StampedPose>& gt) {
+  std::vector<double> before_cm, after_cm;
+  int worse = 0;
+  for (size_t i = 0; i < recorder.moved.size();) {
+    std::vector<StampedPose> before, after;
+    const uint32_t correction = recorder.moved[i].correction;
+    for (; i < recorder.moved.size() && recorder.moved[i].correction == correction; ++i) {
+      const auto t = keyframe_s.find(recorder.moved[i].keyframe_id);
+      if (t == keyframe_s.end()) continue;
+      before.push_back({t->second, recorder.moved[i].before});
+      after.push_back({t->second, recorder.moved[i].after});
+    }
+    std::sort(before.begin(), before.end(),
+              [](const StampedPose& a, const StampedPose& b) { return a.stamp_s < b.stamp_s; });
+    std::sort(after.begin(), after.end(),
+              [](const StampedPose& a, const StampedPose& b) { return a.stamp_s < b.stamp_s; });
+    AteResult b, a;
+    if (!evaluate_ate(gt, before, &b) || !evaluate_ate(gt, after, &a)) continue;
+    before_cm.push_back(100 * b.rmse_m);
+    after_cm.push_back(100 * a.rmse_m);
+    // Worse by more than a millimetre: the correction moved the places away from the truth.
+    worse += a.rmse_m > b.rmse_m + 0.001;
+  }
+  if (before_cm.empty()) return;
+  std::printf(
+      "corrections against the ground truth: %zu checked; ATE of the places they moved, median "
+      "%.2f cm before, %.2f cm after (worst after %.2f cm); %d made it worse by more than 1 mm\n",
+      before_cm.size(), median(before_cm), median(after_cm),
+      *std::max_element(after_cm.begin(), after_cm.end()), worse);
+}
 
 int replay(const std::string& sequence, const Params& params, const std::string& row) {
   Recorder recorder;
@@ -85,7 +135,28 @@ int replay(const std::string& sequence, const Params& params, const std::string&
   };
   std::vector<Outage> outages;
   double previous_s = -1;
+  // Resident memory after init, when both stores are first full (every slot touched), and at
+  // the end; the bench's own records of the run grow in between and are counted apart, and
+  // what their growth freed is handed back first (glibc keeps freed heap resident).
+  const double mb = 1 << 20;
+  auto resident_mb = [&] {
+    (void)malloc_trim(0);
+    return resident_bytes() / mb;
+  };
+  const double init_mb = resident_mb();
+  double full_mb = 0, full_records_mb = 0;
+  int frames = 0, full_frame = 0;
+  const PlaceStore& places = job.system().places();
+  const KeyframePool& pool = job.system().tracking().keyframes();
+  constexpr size_t kMapNodeBytes = 64;  // a std::map node: key, value, three links, rounded up
+  auto records_mb = [&] { return (recorder.bytes() + keyframe_s.size() * kMapNodeBytes) / mb; };
   while (job.step()) {
+    ++frames;
+    if (full_frame == 0 && places.evicted() > 0 && pool.recycled() > 0) {
+      full_frame = frames;
+      full_mb = resident_mb();
+      full_records_mb = records_mb();
+    }
     const PoseEstimate& p = job.last_pose();
     const double t = p.timestamp_ns * 1e-9;
     if ((p.flags & kNewKeyframe) != 0) keyframe_s[p.keyframe_id] = t;
@@ -100,6 +171,8 @@ int replay(const std::string& sequence, const Params& params, const std::string&
       }
     }
   }
+  const double end_mb = resident_mb();
+  const double end_records_mb = records_mb();
   s = job.finish();
   std::vector<StampedPose> gt;
   int bad = 0;
@@ -142,6 +215,7 @@ int replay(const std::string& sequence, const Params& params, const std::string&
       joined_to_older[from->second > to->second ? e.from_id : e.to_id] = true;
     }
   }
+  check_corrections(recorder, keyframe_s, gt);
   // Recall over the keyframes that revisit.
   int revisits = 0, found = 0;
   for (auto i = keyframe_s.begin(); i != keyframe_s.end(); ++i) {
@@ -168,6 +242,27 @@ int replay(const std::string& sequence, const Params& params, const std::string&
       "events: %u lost, %u restarts, %u relocalised, %u loop corrections, %u withheld; %zu "
       "keyframes, %u reused\n",
       c.lost, c.resets, c.relocalised, c.loop_corrections, c.withheld, keyframe_s.size(), c.reused);
+  // The stores' policies at work: what they forgot, and that no forgotten record was used.
+  if (job.loop_enabled()) {
+    std::printf(
+        "stores: %u places remembered, the store keeps %d: %u forgotten (%.1f wraps); the dense "
+        "pool keeps %d: %d recycled; stale handles refused: %u place, %u dense keyframe; %u "
+        "relocalised at places older than the dense pool\n",
+        job.loop().counters().keyframes, places.capacity(), places.evicted(),
+        static_cast<double>(places.evicted()) / places.capacity(), pool.capacity(), pool.recycled(),
+        places.stale_lookups(), pool.stale_lookups(), c.relocalised_past_the_pool);
+  }
+  if (full_frame > 0) {
+    std::printf(
+        "resident memory: %.1f MB after init, %.1f MB when both stores were first full (frame %d), "
+        "%.1f MB after %d frames, of which %.1f MB is this bench's own growing record of the run\n",
+        init_mb, full_mb, full_frame, end_mb, frames, end_records_mb - full_records_mb);
+  } else {
+    std::printf(
+        "resident memory: %.1f MB after init, %.1f MB after %d frames (the stores never "
+        "filled)\n",
+        init_mb, end_mb, frames);
+  }
   for (const Outage& o : outages) {
     const char* how = (o.flags & kRelocalised) != 0 ? "relocalised"
                       : (o.flags & kReset) != 0     ? "restarted"

@@ -11,18 +11,12 @@
 
 #include "clip_camera.hpp"
 #include "rgbdtam/hal/clock.hpp"
+#include "rgbdtam/hal/machine.hpp"
 #include "rgbdtam/hal/tum_replay_source.hpp"
 #include "run_job.hpp"
 
 namespace {
-double resident_mb() {
-  long pages = 0, resident = 0;
-  FILE* f = std::fopen("/proc/self/statm", "r");
-  if (f == nullptr) return 0;
-  const int got = std::fscanf(f, "%ld %ld", &pages, &resident);
-  std::fclose(f);
-  return got == 2 ? static_cast<double>(resident) * 4096 / (1 << 20) : 0.0;
-}
+double resident_mb() { return static_cast<double>(rgbdtam::resident_bytes()) / (1 << 20); }
 }  // namespace
 
 int main(int argc, char** argv) {

@@ -21,7 +21,8 @@ int usage() {
                "  rgbdtam-stress there-and-back <in> <out> --config <file>\n"
                "  rgbdtam-stress pan <out> --peak-deg-s <deg/s> [--frames <n>] [--fps <hz>]\n"
                "  rgbdtam-stress degenerate <out> --scene corridor|room [--frames <n>]\n"
-               "  rgbdtam-stress concat <first> <second> <out> [--gap-s <s>]\n");
+               "  rgbdtam-stress concat <first> <second> <out> [--gap-s <s>]\n"
+               "  rgbdtam-stress wander <in> <out> --config <file> [--frames <n>] [--seed <n>]\n");
   return 2;
 }
 }  // namespace
@@ -86,6 +87,8 @@ int main(int argc, char** argv) {
     ok = there_and_back(positional[0], positional[1], config);
   } else if (verb == "concat" && positional.size() == 3) {
     ok = concatenate(positional[0], positional[1], positional[2], gap_s);
+  } else if (verb == "wander" && positional.size() == 2 && config != nullptr) {
+    ok = wander_sequence(positional[0], positional[1], config, frames, seed);
   } else if (verb == "degenerate" && positional.size() == 1) {
     ok = degenerate_sequence(positional[0], scene, frames);
   } else if (verb == "pan" && positional.size() == 1) {

@@ -540,3 +540,93 @@ bool there_and_back(const std::string& in, const std::string& out, const std::st
 }
 
 }  // namespace rgbdtam::testing
+
+namespace rgbdtam::testing {
+
+bool wander_sequence(const std::string& in, const std::string& out, const std::string& config,
+                     int frames, unsigned seed) {
+  if (frames < 2) return fail("wander: needs at least 2 frames");
+  Params p;
+  if (!load_params(config, &p)) return false;
+  std::vector<std::string> rgb, depth;
+  std::vector<StampedPose> gt;
+  int bad = 0;
+  if (!read_lines(in + "/rgb.txt", &rgb) || !read_lines(in + "/depth.txt", &depth)) return false;
+  if (!read_tum_trajectory((in + "/groundtruth.txt").c_str(), &gt, &bad).is_ok()) {
+    return fail("wander: cannot read " + in + "/groundtruth.txt");
+  }
+  const Trajectory truth(gt);
+  // The playable frames: a colour frame, the depth replay pairs with it, and its true pose.
+  const double offset_s = static_cast<double>(p.sensor.depth_time_offset_ns) * 1e-9;
+  constexpr double kMaxPairingS = 0.02;  // as rgbdtam replay pairs them
+  struct Playable {
+    double t_s;
+    std::string rgb_file, depth_file;
+    SE3 T_w_c;
+  };
+  std::vector<Playable> playable;
+  for (const std::string& l : rgb) {
+    if (!is_data_line(l)) continue;
+    const double t = std::atof(l.c_str());
+    const int d = nearest_line(depth, t + offset_s);
+    SE3 T;
+    if (d < 0 ||
+        std::fabs(std::atof(depth[static_cast<size_t>(d)].c_str()) - t - offset_s) >=
+            kMaxPairingS ||
+        !truth.at(t, &T)) {
+      continue;
+    }
+    playable.push_back({t, file_of(l), file_of(depth[static_cast<size_t>(d)]), T});
+  }
+  const int n = static_cast<int>(playable.size());
+  if (n < 2) return fail("wander: fewer than 2 frames of " + in + " have depth and ground truth");
+  // Segments of a tenth to a half of the sequence, forwards or backwards, at 1x or 2x; every
+  // fifth begins after an outage of 0.5-2 s, somewhere else in it.
+  std::mt19937 rng(seed);
+  auto uniform = [&](double a, double b) { return std::uniform_real_distribution<>(a, b)(rng); };
+  constexpr double kFps = 30.0;
+  std::vector<std::string> rgb_out = {"# a wander of " + std::to_string(frames) + " frames over " +
+                                      in + " (seed " + std::to_string(seed) + ")"};
+  std::vector<std::string> depth_out = rgb_out, gt_out = rgb_out;
+  double t = playable[0].t_s;
+  int at = 0, direction = 1, step = 1, left = 0, segments = 0, outages = 0;
+  char line[256];
+  for (int played = 0; played < frames; ++played) {
+    if (left == 0) {
+      ++segments;
+      left = std::max(2, static_cast<int>(uniform(0.1, 0.5) * n));
+      step = uniform(0, 1) < 0.7 ? 1 : 2;
+      direction = uniform(0, 1) < 0.5 ? 1 : -1;
+      if (segments % 5 == 0) {
+        ++outages;
+        t += uniform(0.5, 2.0);
+        at = static_cast<int>(uniform(0, n));
+      }
+    }
+    if (at + direction * step < 0 || at + direction * step >= n) direction = -direction;
+    const Playable& f = playable[static_cast<size_t>(at)];
+    std::snprintf(line, sizeof(line), "%.6f %s", t, f.rgb_file.c_str());
+    rgb_out.push_back(line);
+    std::snprintf(line, sizeof(line), "%.6f %s", t + offset_s, f.depth_file.c_str());
+    depth_out.push_back(line);
+    const Vector3d& x = f.T_w_c.translation();
+    const Eigen::Quaterniond& q = f.T_w_c.quaternion();
+    std::snprintf(line, sizeof(line), "%.6f %.7f %.7f %.7f %.7f %.7f %.7f %.7f", t, x.x(), x.y(),
+                  x.z(), q.x(), q.y(), q.z(), q.w());
+    gt_out.push_back(line);
+    at = std::clamp(at + direction * step, 0, n - 1);
+    t += 1.0 / kFps;
+    --left;
+  }
+  if (!make_output(in, out) || !write_lines(out + "/rgb.txt", rgb_out) ||
+      !write_lines(out + "/depth.txt", depth_out) ||
+      !write_lines(out + "/groundtruth.txt", gt_out) || !copy_file(in, out, "calib.txt", false) ||
+      !link_into(in, out, "rgb") || !link_into(in, out, "depth")) {
+    return false;
+  }
+  std::printf("%s: %d frames of %s in %d segments, %d outages with a jump\n", out.c_str(), frames,
+              in.c_str(), segments, outages);
+  return true;
+}
+
+}  // namespace rgbdtam::testing

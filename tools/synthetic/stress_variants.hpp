@@ -39,6 +39,12 @@ bool pan_sequence(const std::string& out, double peak_deg_s, int frames, double 
 // two passes; variants of one sequence share its ground truth's frame).
 bool concatenate(const std::string& first, const std::string& second, const std::string& out,
                  double gap_s);
+// A long wander over a sequence, for soaks: `frames` frames in segments of a tenth to a half of
+// the sequence played forwards or backwards at 1x or 2x, every fifth beginning after an outage
+// of 0.5-2 s, elsewhere in the sequence. Each frame keeps its image pair and its true pose under
+// new 30 Hz stamps (depth at config's pairing offset), so places repeat at other times.
+bool wander_sequence(const std::string& in, const std::string& out, const std::string& config,
+                     int frames, unsigned seed);
 // A degenerate synthetic scene (SyntheticScene::Layout: "corridor" or "room"), 30 Hz.
 bool degenerate_sequence(const std::string& out, const std::string& layout, int frames);
 

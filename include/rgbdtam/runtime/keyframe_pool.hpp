@@ -32,6 +32,8 @@ class KeyframePool {
   KeyframeHandle handle(const Keyframe* kf) const;
   // The keyframe a handle names, or null once its slot was recycled.
   Keyframe* get(const KeyframeHandle& h);
+  // Lookups refused because the handle's slot had been recycled (any thread).
+  uint32_t stale_lookups() const { return stale_lookups_.load(std::memory_order_relaxed); }
   void pin(const KeyframeHandle& h);
   void unpin(const KeyframeHandle& h);
   bool pinned(const Keyframe* kf) const;
@@ -51,6 +53,7 @@ class KeyframePool {
   int capacity_ = 0;
   int used_ = 0;
   int recycled_ = 0;
+  std::atomic<uint32_t> stale_lookups_{0};
   uint64_t clock_ = 0;
 };
 

@@ -61,6 +61,9 @@ class LoopObserver {
  public:
   virtual ~LoopObserver() = default;
   virtual void on_edge(const GraphEdgeEvent& event) = 0;
+  // A place moved by the correction numbered `correction` (from 1), under the store's lock.
+  virtual void on_place_moved(uint32_t /*correction*/, uint32_t /*keyframe_id*/,
+                              const SE3& /*T_w_before*/, const SE3& /*T_w_after*/) {}
 };
 
 // The revisit candidates a keyframe's view is aligned with, at most.

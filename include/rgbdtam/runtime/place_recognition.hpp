@@ -57,6 +57,8 @@ class PlaceStore {
   const PlaceRecord& at_slot(int slot) const { return records_[slot]; }
   PlaceHandle handle(int order) const;
   const PlaceRecord* get(const PlaceHandle& h) const;
+  // Lookups refused because the handle's record had been forgotten (any thread).
+  uint32_t stale_lookups() const { return stale_lookups_.load(std::memory_order_relaxed); }
   PlaceDatabase& database() { return database_; }
 
   // Bytes that allocate() takes, for the memory budget.
@@ -71,6 +73,7 @@ class PlaceStore {
   PlaceDatabase database_;
   int capacity_ = 0, size_ = 0, first_ = 0;
   std::atomic<uint32_t> evicted_{0};
+  mutable std::atomic<uint32_t> stale_lookups_{0};
 };
 
 // What a feature match must show to give a first guess of a place's pose (direct alignment of

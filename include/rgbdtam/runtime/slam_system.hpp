@@ -45,9 +45,8 @@ class SlamSystem {
   const TrackingPipeline& tracking() const { return tracking_; }
   const MappingModule& mapper() const { return mapper_; }
   const LoopModule& loop() const { return loop_; }
-  // The place store (loop.places records): how many it has forgotten since it first filled.
-  int place_capacity() const { return places_.capacity(); }
-  uint32_t places_forgotten() const { return places_.evicted(); }
+  // The places (loop.places records), for what they hold and have forgotten.
+  const PlaceStore& places() const { return places_; }
   // A keyframe's pose as the map has it now (loop corrections included): from the tracker's
   // pool, else from the places. Tracker's thread.
   bool keyframe_pose(uint32_t keyframe_id, SE3* T_w_k);

@@ -29,7 +29,8 @@ struct TrackingCounters {
   uint32_t recovered_by_guesses = 0;  // ... and passed from another initial guess
   uint32_t recovered_by_last_frame = 0;      // ... or against the last valid frame
   uint32_t relocalised = 0;                  // lost frames found again in the map
-  uint32_t relocalised_on_new_keyframe = 0;  // ... at a place whose dense keyframe is gone
+  uint32_t relocalised_on_new_keyframe = 0;  // ... on a new keyframe, not the place's own
+  uint32_t relocalised_past_the_pool = 0;    // ... at a place whose dense keyframe was recycled
   uint32_t loop_corrections = 0;             // loop closures adopted
   uint32_t withheld = 0;                     // tracked frames not reported valid after a correction
   uint32_t loop_dropped_keyframes = 0;  // the loop queue was full: not remembered (or a reuse lost)
