@@ -53,7 +53,7 @@ tools/hil/ssh_loopback_check.sh raspberry-pi-4
 build aarch64-radxa-rock-5b rgbdtam
 check aarch64-radxa-rock-5b -R '^(BoardBuild|Firmware)\.'
 echo "=== fuzz: every parser, briefly ($(date +%T))"
-tools/fuzz.sh 10
+tools/fuzz.sh 5
 echo "=== each board's firmware"
 for board in host-emulation raspberry-pi-4 radxa-rock-5b; do
   preset=$(sed -n 's/^build\.preset *= *//p' "board/$board/board.conf")

@@ -1,12 +1,10 @@
 // Robust tracking: what cannot be tracked is reported lost, what is reported tracked is right.
-// Synthetic sequences with exact ground truth, and the committed real clip played faster.
+// Synthetic sequences with exact ground truth (the real clip's variants: test_clip_variants).
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "replay_runner.hpp"
 #include "rgbdtam/runtime/tracking_pipeline.hpp"
-#include "stress_variants.hpp"
 #include "synthetic_scene.hpp"
 #include "test_paths.hpp"
 #include "tum_writer.hpp"
@@ -88,59 +86,6 @@ TEST(RobustTracking, AFastPanIsTrackedOrLostNeverWrong) {
   EXPECT_LT(v.worst_rotation_rad, 1.0 * M_PI / 180);
   std::printf("pan at 180 deg/s: %d of %d tracked, %d lost, worst %.2f mm, %.3f deg\n", v.valid,
               kFrames, v.lost, v.worst_translation_m * 1e3, v.worst_rotation_rad * 180 / M_PI);
-}
-
-TEST(RobustTracking, TheRealClipThreeTimesFasterIsNeverFalseValid) {
-  const std::string dir = testing::make_temp_dir("clip_x3");
-  ASSERT_TRUE(
-      testing::decimate_sequence(testing::source_path("data/tum_fr1_xyz_clip"), dir + "/x3", 3));
-  const auto out =
-      testing::replay_and_evaluate(dir + "/x3", testing::source_path("config/tum_fr1.conf"));
-  EXPECT_EQ(out.counters.frames, 17u);
-  testing::expect_tracked_or_lost(out, "clip x3", 0.9);
-}
-
-TEST(RobustTracking, TheRealClipWithAKidnappedFrameIsNeverFalseValid) {
-  // Frame 25 shows what frame 0 showed, about 20 cm back along the path.
-  const std::string dir = testing::make_temp_dir("clip_kidnap");
-  ASSERT_TRUE(testing::kidnap_frame(testing::source_path("data/tum_fr1_xyz_clip"),
-                                    dir + "/kidnapped", 25, 0));
-  const auto out =
-      testing::replay_and_evaluate(dir + "/kidnapped", testing::source_path("config/tum_fr1.conf"));
-  EXPECT_GE(out.counters.lost, 1u) << "the kidnapped frame";
-  testing::expect_tracked_or_lost(out, "clip with a kidnapped frame", 0.9);
-}
-
-TEST(RobustTracking, NoiseInGivesNoPoseOut) {
-  // Pure noise from the sensor once used to give confident poses metres apart. Noise depth is
-  // not a surface, so no frame has depth and none can be tracked; noise colour over real depth
-  // leaves the geometric term, which may track, but never wrongly.
-  const std::string dir = testing::make_temp_dir("clip_noise");
-  const std::string clip = testing::source_path("data/tum_fr1_xyz_clip");
-  const std::string config = testing::source_path("config/tum_fr1.conf");
-  for (const char* kind : {"depth", "both"}) {
-    ASSERT_TRUE(testing::noise_sequence(clip, dir + "/" + kind, config, kind, 3));
-    const auto out = testing::replay_and_evaluate(dir + "/" + kind, config);
-    EXPECT_EQ(out.counters.frames, 50u) << kind;
-    EXPECT_EQ(out.counters.tracked, 0u) << kind << " noise: no pose";
-    EXPECT_EQ(out.counters.depth_not_surface, 50u) << kind;
-  }
-  ASSERT_TRUE(testing::noise_sequence(clip, dir + "/colour", config, "colour", 3));
-  const auto colour = testing::replay_and_evaluate(dir + "/colour", config);
-  EXPECT_EQ(colour.counters.depth_not_surface, 0u);
-  testing::expect_tracked_or_lost(colour, "clip with noise for colour", 0.9);
-}
-
-// The clip wandered over (rgbdtam-stress wander, as the long soak's sequence is made): reversals,
-// twice the speed and jumps after outages, with every frame's ground truth carried along.
-TEST(RobustTracking, TheClipWanderedOverIsNeverFalseValid) {
-  const std::string dir = testing::make_temp_dir("clip_wander");
-  const std::string config = testing::source_path("config/tum_fr1.conf");
-  ASSERT_TRUE(testing::wander_sequence(testing::source_path("data/tum_fr1_xyz_clip"),
-                                       dir + "/wander", config, 300, 1));
-  const auto out = testing::replay_and_evaluate(dir + "/wander", config);
-  EXPECT_EQ(out.counters.frames, 300u);
-  testing::expect_tracked_or_lost(out, "the clip wandered over", 0.95);
 }
 
 }  // namespace
