@@ -142,9 +142,10 @@ bool outputs_clash(const NamedOutput* outputs, int count, const Params& params, 
   for (int i = 0; i < count; ++i) {
     const NamedOutput& o = outputs[i];
     if (o.path == nullptr) continue;
+    const std::string resolved = resolved_output(o.path);
     for (int j = 0; j < i; ++j) {
-      if (outputs[j].path != nullptr && !resolved_output(o.path).empty() &&
-          resolved_output(o.path) == resolved_output(outputs[j].path)) {
+      if (outputs[j].path != nullptr && !resolved.empty() &&
+          resolved == resolved_output(outputs[j].path)) {
         std::fprintf(stderr, "rgbdtam replay: %s and %s name one file (%s): give each its own\n",
                      outputs[j].option, o.option, o.path);
         return true;

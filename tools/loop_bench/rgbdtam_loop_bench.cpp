@@ -92,10 +92,9 @@ void check_corrections(const Recorder& recorder, const std::map<uint32_t, double
       before.push_back({t->second, recorder.moved[i].before});
       after.push_back({t->second, recorder.moved[i].after});
     }
-    std::sort(before.begin(), before.end(),
-              [](const StampedPose& a, const StampedPose& b) { return a.stamp_s < b.stamp_s; });
-    std::sort(after.begin(), after.end(),
-              [](const StampedPose& a, const StampedPose& b) { return a.stamp_s < b.stamp_s; });
+    auto by_time = [](const StampedPose& a, const StampedPose& b) { return a.stamp_s < b.stamp_s; };
+    std::sort(before.begin(), before.end(), by_time);
+    std::sort(after.begin(), after.end(), by_time);
     AteResult b, a;
     if (!evaluate_ate(gt, before, &b) || !evaluate_ate(gt, after, &a)) continue;
     before_cm.push_back(100 * b.rmse_m);
