@@ -43,6 +43,7 @@ seed_text_formats() {  # the first byte chooses the format (fuzz_text_formats.cp
   printf '\x04tracker.robust_c=3' >"$1/seed$n"
 }
 
+fuzzers=()
 for t in "${targets[@]}"; do
   case $t in
     mavlink_decoder) build "$t" src/runtime/mavlink.cpp tests/fuzz/fuzz_mavlink_decoder.cpp ;;
@@ -57,8 +58,18 @@ for t in "${targets[@]}"; do
   corpus="$out/corpus_$t"
   mkdir -p "$corpus"
   "seed_$t" "$corpus"
-  echo "--- $t ($seconds s)"
+  # Fuzzes while the next target builds; the reports follow, in order.
   "$out/fuzz_$t" "$corpus" -max_total_time="$seconds" -print_final_stats=1 -rss_limit_mb=2048 \
-    -max_len=8192 2>&1 | grep -E "^(Done|stat::number_of_executed_units|==|SUMMARY)|ERROR|crash" || true
-  test "${PIPESTATUS[0]}" -eq 0
+    -max_len=8192 >"$out/log_$t" 2>&1 &
+  fuzzers+=("$t:$!")
 done
+failed=0
+for entry in "${fuzzers[@]}"; do
+  t=${entry%%:*}
+  status=0
+  wait "${entry#*:}" || status=$?
+  echo "--- $t ($seconds s)"
+  grep -E "^(Done|stat::number_of_executed_units|==|SUMMARY)|ERROR|crash" "$out/log_$t" || true
+  [ "$status" -eq 0 ] || failed=1
+done
+exit "$failed"

@@ -33,13 +33,14 @@ if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 # libopenni2-dev: the OpenNI2 backend of the dynamic build, and its Dummy device for tests.
 # libjpeg62-turbo-dev: MJPEG colour from UVC cameras (libjpeg-turbo's static libjpeg.a);
 # libmicrohttpd-dev: the monitor's live page.
-packages=(build-essential cmake libeigen3-dev libpng-dev zlib1g-dev libgpiod-dev googletest file
-  python3-open3d libfreenect-dev libopenni2-dev libjpeg62-turbo-dev libmicrohttpd-dev)
+packages=(build-essential cmake ninja-build libeigen3-dev libpng-dev zlib1g-dev libgpiod-dev
+  googletest file python3-open3d libfreenect-dev libopenni2-dev libjpeg62-turbo-dev libmicrohttpd-dev)
 # tools/mavlink-check decodes the link with node-mavlink and drives Chromium with
 # playwright-core (both pinned in its lockfile). A Node that is already there (with its npm) is
 # used as it is.
 command -v node >/dev/null && command -v npm >/dev/null || packages+=(nodejs npm)
-if $aarch64; then packages+=(g++-aarch64-linux-gnu qemu-user); fi
+# ccache: the test command's two aarch64 boards share their core's objects through it.
+if $aarch64; then packages+=(g++-aarch64-linux-gnu qemu-user ccache); fi
 if $fuzz; then packages+=(clang); fi  # libFuzzer ships with Debian's clang
 # rgbdtam-vs-opencv (the dynamic build's host benchmark) compares with OpenCV's RgbdOdometry.
 if $opencv; then packages+=(libopencv-dev libopencv-contrib-dev); fi

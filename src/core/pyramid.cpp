@@ -34,7 +34,7 @@ void downsample_inverse_depth_row(const float* __restrict r0, const float* __res
     const float n = (a > 0.f ? 1.f : 0.f) + (b > 0.f ? 1.f : 0.f) + (c > 0.f ? 1.f : 0.f) +
                     (d > 0.f ? 1.f : 0.f);
     const float mean = sum / std::max(n, 1.f);
-    out[x] = (n >= 2.f) & (lo >= kDepthBlockAgreement * hi) ? mean : 0.f;
+    out[x] = ((n >= 2.f) & (lo >= kDepthBlockAgreement * hi)) ? mean : 0.f;
   }
 }
 

@@ -221,9 +221,15 @@ TEST_P(CliStop, EndsAReplayWithCompleteOutputs) {
   const std::string seq = testing::full_fr1_xyz();
   if (seq.empty()) GTEST_SKIP() << "no full fr1_xyz on this machine";
   const std::string dir = testing::make_temp_dir("cli_stop");
+  // The signal comes once poses are on disk (the trajectory is flushed at least once a second),
+  // however long init takes on a loaded machine.
+  const std::string signal_when_tracking =
+      "sh -c '\"$0\" \"$@\" & p=$!; i=0; while [ $i -lt 600 ] && [ \"$(cat " + dir +
+      "/t.txt.partial 2>/dev/null | wc -l)\" -lt 3 ]; do sleep 0.1; i=$((i + 1)); done; kill -" +
+      GetParam() + " $p; wait $p'";
   const Outcome o = rgbdtam("replay " + seq + " --config " + config() + " --trajectory " + dir +
                                 "/t.txt --map " + dir + "/m.ply",
-                            std::string("timeout --preserve-status -s ") + GetParam() + " 2");
+                            signal_when_tracking);
   EXPECT_EQ(o.exit_code, 130) << o.err;
   EXPECT_NE(o.err.find("interrupted after"), std::string::npos) << o.err;
   const std::string trajectory = read_all(dir + "/t.txt");

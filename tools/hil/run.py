@@ -3,7 +3,7 @@
 the board, with results collected as ctest would.
 
   tools/hil/run.py <board> <address> [--attached sensor,gpio-loopback,...] [-j N]
-                   [--exclude-label long] [--only REGEX] [--remote-prefix CMD]
+                   [--exclude-label long] [--only REGEX] [--skip REGEX] [--remote-prefix CMD]
                    [--binary NAME]... [--ssh-config FILE]
 
 <board> is a folder name under board/; its build.preset names the build (build/<preset>).
@@ -159,6 +159,7 @@ def main():
     parser.add_argument("--attached", default="", help="hardware the rack provides, comma-separated")
     parser.add_argument("--exclude-label", action="append", default=[])
     parser.add_argument("--only", default="", help="run only tests whose name matches")
+    parser.add_argument("--skip", default="", help="leave out tests whose name matches")
     parser.add_argument("--binary", action="append", default=[],
                         help="copy and run only this test binary (repeatable)")
     parser.add_argument("--remote-prefix", default="", help="command that runs each binary there")
@@ -231,6 +232,8 @@ def main():
                 continue
             test = suite + line.split("#", 1)[0].strip()
             if args.only and not re.search(args.only, test):
+                continue
+            if args.skip and re.search(args.skip, test):
                 continue
             if test in manifest and manifest[test][0] not in attached:
                 skipped.append((test, manifest[test]))
