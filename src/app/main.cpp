@@ -15,6 +15,7 @@
 #include "build_id.h"
 #include "config_files.hpp"
 #include "evaluate_command.hpp"
+#include "map_command.hpp"
 #include "record_job.hpp"
 #include "replay_job.hpp"
 #include "rgbdtam/hal/file.hpp"
@@ -25,12 +26,16 @@
 namespace rgbdtam {
 namespace {
 
+constexpr const char* kWrittenBy =
+    "rgbdtam " RGBDTAM_VERSION ", commit " RGBDTAM_COMMIT ", board " RGBDTAM_BUILD_BOARD;
+
 void usage() {
   std::fprintf(
       stderr,
       "usage:\n"
       "  rgbdtam replay <sequence-dir> --config <file> [--trajectory out.txt]\n"
       "                 [--final-trajectory out.txt] [--map map.ply]\n"
+      "                 [--map-in saved.map] [--map-out saved.map]\n"
       "                 [--set key=value]... [--max-frames N] [--quiet] [--json]\n"
       "  rgbdtam eval <groundtruth.txt> <estimate.txt> [--json] [--frames rgb.txt]\n"
       "               [--plot out.svg]\n"
@@ -40,6 +45,7 @@ void usage() {
       "  rgbdtam check --board <board-folder> [--board-set key=value]... [--set key=value]...\n"
       "  rgbdtam record --board <board-folder> <out-dir> [--board-set key=value]...\n"
       "                 [--max-frames N]\n"
+      "  rgbdtam map info <file>\n"
       "  rgbdtam vocabulary train <sequence-dir>... --config <file> --out <file>\n"
       "  rgbdtam --version\n"
       "sensor backends in this build: " RGBDTAM_HAL_BACKENDS "\n");
@@ -134,11 +140,17 @@ struct NamedOutput {
 
 // True (after saying so) when writing an output would replace a file the run reads (the config,
 // the vocabulary it names, the sequence's lists or images) or another output of the run.
+// A saved map may replace the map it started from (load, extend, save), which is read whole at
+// init and replaced only by a complete new file.
 bool outputs_clash(const NamedOutput* outputs, int count, const Params& params, const char* config,
-                   const std::string& sequence) {
-  const std::string inputs[] = {config, params.loop.enabled ? params.loop.vocabulary : "",
-                                sequence + "/rgb.txt", sequence + "/depth.txt",
-                                sequence + "/groundtruth.txt"};
+                   const std::string& sequence, const char* map_in) {
+  const std::string map_in_path = map_in != nullptr ? map_in : "";
+  const std::string inputs[] = {config,
+                                params.loop.enabled ? params.loop.vocabulary : "",
+                                sequence + "/rgb.txt",
+                                sequence + "/depth.txt",
+                                sequence + "/groundtruth.txt",
+                                map_in_path};
   for (int i = 0; i < count; ++i) {
     const NamedOutput& o = outputs[i];
     if (o.path == nullptr) continue;
@@ -154,6 +166,7 @@ bool outputs_clash(const NamedOutput* outputs, int count, const Params& params, 
     struct stat out;
     if (::stat(o.path, &out) != 0) continue;  // a new file replaces nothing
     for (const std::string& input : inputs) {
+      if (&input == &map_in_path && std::strcmp(o.option, "--map-out") == 0) continue;
       if (!input.empty() && same_file(input, out)) {
         std::fprintf(stderr, "rgbdtam replay: %s %s is an input of this run (%s)\n", o.option,
                      o.path, input.c_str());
@@ -207,6 +220,10 @@ int replay_command(int argc, char** argv) {
       options.final_trajectory_path = argv[++i];
     } else if (std::strcmp(argv[i], "--map") == 0 && i + 1 < argc) {
       map_path = argv[++i];
+    } else if (std::strcmp(argv[i], "--map-in") == 0 && i + 1 < argc) {
+      options.map_in_path = argv[++i];
+    } else if (std::strcmp(argv[i], "--map-out") == 0 && i + 1 < argc) {
+      options.map_out_path = argv[++i];
     } else if (std::strcmp(argv[i], "--max-frames") == 0 && i + 1 < argc) {
       if (!parse_max_frames(argv[++i], "replay", &options.max_frames)) return 2;
     } else if (std::strcmp(argv[i], "--quiet") == 0) {
@@ -233,12 +250,28 @@ int replay_command(int argc, char** argv) {
   }
   const NamedOutput outputs[] = {{"--trajectory", options.trajectory_path},
                                  {"--final-trajectory", options.final_trajectory_path},
-                                 {"--map", map_path}};
-  if (outputs_clash(outputs, 3, options.params, c.config, options.sequence)) return 2;
+                                 {"--map", map_path},
+                                 {"--map-out", options.map_out_path}};
+  if (outputs_clash(outputs, 4, options.params, c.config, options.sequence, options.map_in_path)) {
+    return 2;
+  }
   if (map_path != nullptr && !options.params.map_enabled) {
     std::fprintf(stderr, "rgbdtam replay: --map needs map.enabled = true\n");
     return 2;
   }
+  if ((options.map_in_path != nullptr || options.map_out_path != nullptr) &&
+      (!options.params.loop.enabled || options.params.loop.vocabulary[0] == '\0')) {
+    std::fprintf(stderr,
+                 "rgbdtam replay: --map-in and --map-out need loop closure (loop.enabled = true "
+                 "and a loop.vocabulary)\n");
+    return 2;
+  }
+  if (options.map_out_path != nullptr && options.params.map_mode == MapMode::kLocalise) {
+    std::fprintf(stderr,
+                 "rgbdtam replay: map.mode = localise never writes a map: drop --map-out\n");
+    return 2;
+  }
+  options.written_by = kWrittenBy;
   auto ply = std::make_unique<PlyMapWriter>();
   if (map_path != nullptr) options.map_sink = ply.get();
   auto job = std::make_unique<ReplayJob>();
@@ -338,6 +371,7 @@ bool parse_run_options(int argc, char** argv, RunOptions* options, const char** 
 int run_command(int argc, char** argv) {
   RunOptions options;
   if (!parse_run_options(argc, argv, &options, nullptr, "run")) return 2;
+  options.written_by = kWrittenBy;
   auto job = std::make_unique<RunJob>();
   Status s = job->init(options);
   if (s.is_ok()) s = job->start();
@@ -427,6 +461,7 @@ int main(int argc, char** argv) {
   if (std::strcmp(verb, "run") == 0) return rgbdtam::run_command(argc - 2, argv + 2);
   if (std::strcmp(verb, "record") == 0) return rgbdtam::record_command(argc - 2, argv + 2);
   if (std::strcmp(verb, "check") == 0) return rgbdtam::check_command(argc - 2, argv + 2);
+  if (std::strcmp(verb, "map") == 0) return rgbdtam::map_command(argc - 2, argv + 2);
   if (std::strcmp(verb, "vocabulary") == 0) {
     return rgbdtam::vocabulary_command(argc - 2, argv + 2);
   }

@@ -48,6 +48,9 @@ Status ReplayJob::init(const ReplayOptions& options) {
   RGBDTAM_RETURN_IF_ERROR(
       system_.init(p, monotonic_ns, options.map_sink, loop ? &vocabulary_ : nullptr));
   system_.set_loop_observer(options.loop_observer);
+  if (options.map_in_path != nullptr) {
+    RGBDTAM_RETURN_IF_ERROR(load_map_file(options.map_in_path, p, &system_, &loaded_map_));
+  }
   RGBDTAM_RETURN_IF_ERROR(system_.start());
   if (options.trajectory_path != nullptr) {
     RGBDTAM_RETURN_IF_ERROR(writer_.open(options.trajectory_path));
@@ -88,6 +91,8 @@ bool ReplayJob::step() {
   write_failure_ = writer_.write(last_pose_);
   const double t_s = static_cast<double>(last_pose_.timestamp_ns) * 1e-9;
   if ((last_pose_.flags & kPoseValid) != 0) {
+    if (found_in_map_at_frame_ < 0 && loaded_map_.places > 0)
+      found_in_map_at_frame_ = processed_ - 1;
     estimates_.push_back({t_s, last_pose_.T_w_c});
     covariances_.push_back(pose_covariance(last_pose_));
   }
@@ -118,6 +123,9 @@ Status ReplayJob::finish() {
     const bool placed = f.on_keyframe && system_.keyframe_pose(f.keyframe_id, &T_w_k);
     // A keyframe the map forgot: the frame keeps the pose it was reported with.
     final_estimates_.push_back({f.t_s, placed ? T_w_k * f.T_k_c : f.T_w_c});
+  }
+  if (options_.map_out_path != nullptr && closed.is_ok() && system_.loop_enabled()) {
+    closed = save_map_file(options_.map_out_path, system_, options_.written_by);
   }
   if (options_.final_trajectory_path != nullptr && closed.is_ok()) {
     TrajectoryWriter final_writer;
@@ -168,6 +176,15 @@ void ReplayJob::print_summary() const {
         system_.mapper().time_per_keyframe().percentile_ms(0.95));
   }
   print_loop_summary(system_);
+  if (loaded_map_.places > 0) {
+    std::printf("map file: %s, %u places and %u graph edges loaded; ", options_.map_in_path,
+                loaded_map_.places, loaded_map_.edges);
+    if (found_in_map_at_frame_ >= 0) {
+      std::printf("found in it at frame %d\n", found_in_map_at_frame_);
+    } else {
+      std::printf("never found in it (no pose reported)\n");
+    }
+  }
   std::printf("memory: %.0f MB allocated at init (half of this machine's memory is the budget)\n",
               static_cast<double>(memory_needed_bytes_) / (1 << 20));
   std::printf("tracking ms/frame: median %.2f, p95 %.2f, max %.2f\n",

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "evaluate_command.hpp"
+#include "map_files.hpp"
 #include "rgbdtam/core/evaluation.hpp"
 #include "rgbdtam/hal/tum_replay_source.hpp"
 #include "rgbdtam/hal/tum_trajectory.hpp"
@@ -20,7 +21,11 @@ struct ReplayOptions {
   // Optional: every tracked frame again at the end, placed on its keyframe as the final map
   // has it (after loop closures), as offline SLAM evaluations report.
   const char* final_trajectory_path = nullptr;
-  MapSink* map_sink = nullptr;            // optional: receives each keyframe's map
+  MapSink* map_sink = nullptr;  // optional: receives each keyframe's map
+  // Optional: a map file to start in (its places and graph), and one to save the final map to.
+  const char* map_in_path = nullptr;
+  const char* map_out_path = nullptr;
+  const char* written_by = "rgbdtam";     // the build, recorded in a saved map
   LoopObserver* loop_observer = nullptr;  // optional: every verified place match
   Params params;
   bool progress = true;
@@ -54,6 +59,9 @@ class ReplayJob {
   bool loop_enabled() const { return system_.loop_enabled(); }
   const LoopModule& loop() const { return system_.loop(); }
   const SlamSystem& system() const { return system_; }
+  // What the loaded map held (places = 0 when none was).
+  const MapFileInfo& loaded_map() const { return loaded_map_; }
+  int found_in_map_at_frame() const { return found_in_map_at_frame_; }
 
  private:
   ReplayOptions options_;
@@ -80,6 +88,8 @@ class ReplayJob {
   std::atomic<bool> stop_requested_{false};
   Status write_failure_;
   uint64_t memory_needed_bytes_ = 0;
+  MapFileInfo loaded_map_;
+  int found_in_map_at_frame_ = -1;  // the first valid pose's frame (from 0) after loading
   int64_t started_ns_ = 0, finished_ns_ = 0;
 };
 

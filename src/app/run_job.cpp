@@ -6,8 +6,13 @@
 #include <cstdlib>
 #include <cstring>
 
+#include <sys/stat.h>
+
+#include <cerrno>
+
 #include "config_files.hpp"
 #include "loop_summary.hpp"
+#include "map_files.hpp"
 #include "memory_budget.hpp"
 #include "rgbdtam/hal/clock.hpp"
 #include "rgbdtam/hal/file.hpp"
@@ -197,8 +202,29 @@ Status RunJob::init(const RunOptions& options) {
     gpio_ = std::move(chip);
   }
   runtime_ = std::make_unique<FirmwareRuntime>();
-  return runtime_->init(params_, board_, link_.get(), gpio_.get(), monotonic_ns,
-                        loop ? &vocabulary_ : nullptr);
+  RGBDTAM_RETURN_IF_ERROR(runtime_->init(params_, board_, link_.get(), gpio_.get(), monotonic_ns,
+                                         loop ? &vocabulary_ : nullptr));
+  return open_map_file(loop);
+}
+
+// The board's map: loaded when it exists; in slam mode a missing one is made at the end.
+Status RunJob::open_map_file(bool loop) {
+  if (board_.map_file[0] == '\0') return Status::ok();
+  if (!loop) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "map.file %s needs loop closure (loop.enabled and a loop.vocabulary)",
+                         board_.map_file);
+  }
+  struct stat st;
+  if (::stat(board_.map_file, &st) != 0 && errno == ENOENT) {
+    if (params_.map_mode == MapMode::kLocalise) {
+      return Status::error(StatusCode::kNotFound,
+                           "map.mode = localise needs a saved map: map.file %s does not exist",
+                           board_.map_file);
+    }
+    return Status::ok();
+  }
+  return load_map_file(board_.map_file, params_, runtime_.get(), &loaded_map_);
 }
 
 Status RunJob::start() {
@@ -251,6 +277,9 @@ void RunJob::finish() {
   wall_ns_ = monotonic_ns() - started_ns_;
   sensor_.live->stop();
   runtime_->stop();
+  if (board_.map_file[0] != '\0' && params_.map_mode == MapMode::kSlam) {
+    map_saved_ = save_map_file(board_.map_file, runtime_->slam(), options_.written_by);
+  }
   if (options_.progress) std::fprintf(stderr, "\n");
 }
 
@@ -326,6 +355,13 @@ void RunJob::print_summary() const {
               m.time_per_keyframe().percentile_ms(0.5), m.time_per_keyframe().percentile_ms(0.95),
               m.time_per_keyframe().max_ms(), m.counters().keyframes_mapped);
   print_loop_summary(runtime_->slam());
+  if (board_.map_file[0] != '\0') {
+    std::printf("map file: %s: %u places loaded%s; %s\n", board_.map_file, loaded_map_.places,
+                params_.map_mode == MapMode::kLocalise ? " (localise: never written)" : "",
+                params_.map_mode == MapMode::kLocalise ? "left as it was"
+                : map_saved_.is_ok()                   ? "saved"
+                                                       : map_saved_.message());
+  }
   const LinkTask& l = runtime_->link();
   const PoseLinkCounters& lc = l.counters();
   const LinkCounters& tc = link_->counters();

@@ -31,6 +31,7 @@ struct RunOptions {
   bool progress = true;
   V4l2Io* v4l2_io =
       nullptr;  // a v4l2 board's system calls; null: the real ones (a soak fakes them)
+  const char* written_by = "rgbdtam";  // the build, recorded in a saved map
 };
 
 // Reads board_dir/board.conf and validates it.
@@ -69,9 +70,12 @@ class RunJob {
   // One frame at the sensor's cadence; false at the end of the stream or after request_stop().
   bool step();
   void request_stop() { stop_requested_.store(true); }
-  // Lets the mapper and the link finish, and joins them.
+  // Lets the mapper and the link finish, and joins them; then saves the board's map.file.
   void finish();
   void print_summary() const;
+  // The board's map.file: what was loaded (places = 0: none), and how saving it went.
+  const MapFileInfo& loaded_map() const { return loaded_map_; }
+  const Status& map_saved() const { return map_saved_; }
 
   const FirmwareRuntime& runtime() const { return *runtime_; }
   const Board& board() const { return board_; }
@@ -87,7 +91,11 @@ class RunJob {
   BoardSensor sensor_;
   std::unique_ptr<ByteLink> link_;
   std::unique_ptr<GpioOutputs> gpio_;
+  Status open_map_file(bool loop);
+
   std::unique_ptr<FirmwareRuntime> runtime_;
+  MapFileInfo loaded_map_;
+  Status map_saved_;
   std::atomic<bool> stop_requested_{false};
   int64_t started_ns_ = 0;
   int64_t last_progress_ns_ = 0;

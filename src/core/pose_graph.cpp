@@ -94,7 +94,7 @@ void PoseGraph::multiply(const Vector6d* x, Vector6d* out) const {
     out[e.from] += e.H_from_to * x[e.to];
     out[e.to] += e.H_from_to.transpose() * x[e.from];
   }
-  out[0].setZero();  // the fixed node
+  for (int i = 0; i < std::min(fixed_, nodes_); ++i) out[i].setZero();
 }
 
 int PoseGraph::solve(int max_iterations) {
@@ -105,7 +105,7 @@ int PoseGraph::solve(int max_iterations) {
     preconditioner_[i] =
         (H_diag_[i] + 1e-9 * Matrix6d::Identity()).ldlt().solve(Matrix6d::Identity());
   }
-  r_[0].setZero();
+  for (int i = 0; i < std::min(fixed_, nodes_); ++i) r_[i].setZero();
   double rz = 0.0, r0 = 0.0;
   for (int i = 0; i < nodes_; ++i) {
     z_[i] = preconditioner_[i] * r_[i];
@@ -149,7 +149,7 @@ PoseGraphStats PoseGraph::optimize(int max_iterations) {
   for (int it = 0; it < max_iterations; ++it) {
     build_normal_equations();
     s.cg_iterations += solve(max_cg);
-    for (int i = 1; i < nodes_; ++i) pose_[i] = pose_[i] * SE3::exp(delta_[i]);
+    for (int i = fixed_; i < nodes_; ++i) pose_[i] = pose_[i] * SE3::exp(delta_[i]);
     ++s.iterations;
     const double c = cost();
     const double previous = s.final_cost;

@@ -4,31 +4,14 @@
 #include <cmath>
 #include <cstring>
 
+#include "rgbdtam/core/byte_io.hpp"
+
 namespace rgbdtam {
 namespace {
 constexpr char kMagic[8] = {'R', 'G', 'B', 'D', 'V', 'O', 'C', '1'};
 constexpr size_t kHeaderBytes = 8 + 4 * 4;
 constexpr size_t kNodeBytes = 32 + 4 + 2 + 2 + 4 + 4;
 constexpr int kKMediansIterations = 10;
-
-uint32_t fnv1a(const uint8_t* data, size_t size) {
-  uint32_t h = 2166136261u;
-  for (size_t i = 0; i < size; ++i) h = (h ^ data[i]) * 16777619u;
-  return h;
-}
-
-template <typename T>
-void put(uint8_t** p, T v) {
-  std::memcpy(*p, &v, sizeof(T));  // the targets are little-endian, as the format
-  *p += sizeof(T);
-}
-template <typename T>
-T get(const uint8_t** p) {
-  T v;
-  std::memcpy(&v, *p, sizeof(T));
-  *p += sizeof(T);
-  return v;
-}
 
 uint32_t next_random(uint32_t* s) {
   *s ^= *s << 13;
@@ -168,6 +151,9 @@ Vocabulary Vocabulary::train(const std::vector<std::vector<Descriptor>>& images,
     }
   }
   v.index_words();
+  std::vector<uint8_t> file(v.serialized_size());
+  v.serialize(file.data());
+  std::memcpy(&v.checksum_, file.data() + file.size() - 4, 4);
   return v;
 }
 
@@ -231,29 +217,29 @@ void Vocabulary::serialize(uint8_t* out) const {
   uint8_t* p = out;
   std::memcpy(p, kMagic, sizeof(kMagic));
   p += sizeof(kMagic);
-  put<uint32_t>(&p, static_cast<uint32_t>(branching_));
-  put<uint32_t>(&p, static_cast<uint32_t>(depth_));
-  put<uint32_t>(&p, static_cast<uint32_t>(nodes_count_));
-  put<uint32_t>(&p, static_cast<uint32_t>(words_));
+  put_le<uint32_t>(&p, static_cast<uint32_t>(branching_));
+  put_le<uint32_t>(&p, static_cast<uint32_t>(depth_));
+  put_le<uint32_t>(&p, static_cast<uint32_t>(nodes_count_));
+  put_le<uint32_t>(&p, static_cast<uint32_t>(words_));
   for (int i = 0; i < nodes_count_; ++i) {
     const Node& n = nodes_[i];
-    for (const uint64_t b : n.centre.bits) put<uint64_t>(&p, b);
-    put<int32_t>(&p, n.first_child);
-    put<uint16_t>(&p, n.children);
-    put<uint16_t>(&p, 0);
-    put<int32_t>(&p, n.word);
-    put<float>(&p, n.idf);
+    for (const uint64_t b : n.centre.bits) put_le<uint64_t>(&p, b);
+    put_le<int32_t>(&p, n.first_child);
+    put_le<uint16_t>(&p, n.children);
+    put_le<uint16_t>(&p, 0);
+    put_le<int32_t>(&p, n.word);
+    put_le<float>(&p, n.idf);
   }
-  put<uint32_t>(&p, fnv1a(out, static_cast<size_t>(p - out)));
+  put_le<uint32_t>(&p, fnv1a(out, static_cast<size_t>(p - out)));
 }
 
 Status Vocabulary::parse(const uint8_t* data, size_t size, Vocabulary* out) {
   if (size < kHeaderBytes + 4 || std::memcmp(data, kMagic, sizeof(kMagic)) != 0) {
     return Status::error(StatusCode::kCorrupt, "not a vocabulary file (no RGBDVOC1 header)");
   }
-  const uint8_t* p = data + sizeof(kMagic);
-  const uint32_t branching = get<uint32_t>(&p), depth = get<uint32_t>(&p);
-  const uint32_t nodes = get<uint32_t>(&p), words = get<uint32_t>(&p);
+  ByteReader p(data + sizeof(kMagic), size - sizeof(kMagic));
+  const uint32_t branching = p.get<uint32_t>(), depth = p.get<uint32_t>();
+  const uint32_t nodes = p.get<uint32_t>(), words = p.get<uint32_t>();
   if (branching < 2 || branching > 64 || depth < 1 || depth > 8 || nodes < 2 ||
       nodes > 10'000'000 || words < 1 || words >= nodes) {
     return Status::error(StatusCode::kCorrupt,
@@ -265,21 +251,21 @@ Status Vocabulary::parse(const uint8_t* data, size_t size, Vocabulary* out) {
     return Status::error(StatusCode::kCorrupt, "vocabulary of %u nodes should be %zu bytes, is %zu",
                          nodes, kHeaderBytes + kNodeBytes * nodes + 4, size);
   }
-  const uint8_t* end = data + size - 4;
-  const uint8_t* q = end;
-  if (get<uint32_t>(&q) != fnv1a(data, size - 4)) {
+  uint32_t checksum;
+  std::memcpy(&checksum, data + size - 4, 4);
+  if (checksum != fnv1a(data, size - 4)) {
     return Status::error(StatusCode::kCorrupt, "vocabulary checksum mismatch (damaged file)");
   }
   std::unique_ptr<Node[]> parsed(new Node[nodes]);
   uint32_t leaves = 0;
   for (uint32_t i = 0; i < nodes; ++i) {
     Node& n = parsed[i];
-    for (uint64_t& b : n.centre.bits) b = get<uint64_t>(&p);
-    n.first_child = get<int32_t>(&p);
-    n.children = get<uint16_t>(&p);
-    (void)get<uint16_t>(&p);
-    n.word = get<int32_t>(&p);
-    n.idf = get<float>(&p);
+    for (uint64_t& b : n.centre.bits) b = p.get<uint64_t>();
+    n.first_child = p.get<int32_t>();
+    n.children = p.get<uint16_t>();
+    (void)p.get<uint16_t>();
+    n.word = p.get<int32_t>();
+    n.idf = p.get<float>();
     const bool inner = n.children > 0;
     // Children after their parent: the descent always ends.
     const bool links_ok =
@@ -301,6 +287,7 @@ Status Vocabulary::parse(const uint8_t* data, size_t size, Vocabulary* out) {
   out->words_ = static_cast<int>(words);
   out->branching_ = static_cast<int>(branching);
   out->depth_ = static_cast<int>(depth);
+  out->checksum_ = checksum;
   out->index_words();
   return Status::ok();
 }

@@ -80,6 +80,27 @@ OutputFile::~OutputFile() {
   if (file_ != nullptr) std::fclose(file_);
 }
 
+namespace {
+// Best effort: a folder that cannot be opened or synced (some network file systems) leaves the
+// rename to the kernel's own schedule.
+void sync_folder_of(const char* path) {
+  char folder[PATH_MAX];
+  std::snprintf(folder, sizeof(folder), "%s", path);
+  char* slash = std::strrchr(folder, '/');
+  if (slash == nullptr) {
+    std::snprintf(folder, sizeof(folder), ".");
+  } else if (slash == folder) {
+    slash[1] = '\0';
+  } else {
+    *slash = '\0';
+  }
+  const int fd = ::open(folder, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return;
+  (void)::fsync(fd);
+  ::close(fd);
+}
+}  // namespace
+
 Status OutputFile::open(const char* path, char* buffer, size_t size) {
   if (std::snprintf(path_, sizeof(path_), "%s", path) >= static_cast<int>(sizeof(path_))) {
     return Status::error(StatusCode::kInvalidArgument, "%s: path too long", path);
@@ -112,12 +133,16 @@ Status OutputFile::flush() {
 Status OutputFile::commit() {
   if (file_ == nullptr) return status_;
   (void)flush();
+  // On the disk before it takes the real name, and the name on the disk after: a power cut
+  // leaves the old file or the new one, whole.
+  if (status_.is_ok() && !direct_ && ::fsync(fileno(file_)) != 0) (void)fail("sync failed");
   const bool closed = std::fclose(file_) == 0;
   file_ = nullptr;
   if (!closed) (void)fail("close failed");
   if (status_.is_ok() && !direct_ && std::rename(partial_, path_) != 0) {
     (void)fail("cannot rename into place");
   }
+  if (status_.is_ok() && !direct_) sync_folder_of(path_);
   return status_;
 }
 

@@ -54,6 +54,9 @@ const KeySpec kSpecs[] = {
                  sensor_depth, false),
     RGBDTAM_TEXT("sensor.usb_id", "vendor:product (hex) that must be attached, e.g. 045e:02ae",
                  sensor_usb_id, false),
+    RGBDTAM_TEXT("map.file",
+                 "saved map: loaded at start when it exists, saved at the end (map.mode slam)",
+                 map_file, false),
     RGBDTAM_TEXT("board.sysfs_root", "where sysfs is mounted (/sys)", sysfs_root, false),
     RGBDTAM_TEXT("board.devfs_root", "where /dev is (usbfs nodes for a USB reset)", devfs_root,
                  false),
@@ -147,7 +150,7 @@ Status parse_board(const char* text, const char* source, const char* board_dir, 
     return Status::error(StatusCode::kInvalidArgument, "%s: folder path too long", source);
   }
   // A replay folder, params file or device path written relative to the board folder.
-  if (!resolve(b.sensor_config, board_dir) ||
+  if (!resolve(b.sensor_config, board_dir) || !resolve(b.map_file, board_dir) ||
       (sensor_device_is_a_folder(b) && !resolve(b.sensor_device, board_dir))) {
     return Status::error(StatusCode::kInvalidArgument, "%s: a resolved path is too long", source);
   }
@@ -165,6 +168,7 @@ Status set_board_value(const char* assignment, Board* out) {
     return std::strncmp(key, name, n) == 0 && (key[n] == '=' || key[n] == ' ' || key[n] == '\t');
   };
   if ((is("sensor.config") && !resolve(out->sensor_config, out->directory)) ||
+      (is("map.file") && !resolve(out->map_file, out->directory)) ||
       (is("sensor.device") && sensor_device_is_a_folder(*out) &&
        !resolve(out->sensor_device, out->directory))) {
     return Status::error(StatusCode::kInvalidArgument, "--board-set %s: resolved path too long",

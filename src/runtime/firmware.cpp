@@ -38,6 +38,12 @@ void FirmwareRuntime::post_event(uint8_t severity, const char* text) {
   if (link_.post_status(severity, text)) ++counters_.status_texts;
 }
 
+Status FirmwareRuntime::load_map(const uint8_t* data, size_t size, MapFileInfo* info) {
+  RGBDTAM_RETURN_IF_ERROR(slam_.load_map(data, size, info));
+  localising_ = true;
+  return Status::ok();
+}
+
 PoseEstimate FirmwareRuntime::on_frame(const SensorFrame& frame, int64_t arrival_ns) {
   const int64_t t0 = clock_();
   const bool trigger = gpio_ != nullptr && board_.gpio_trigger_line >= 0;
@@ -61,6 +67,10 @@ PoseEstimate FirmwareRuntime::on_frame(const SensorFrame& frame, int64_t arrival
                                               ? "rgbdtam: relocalised in the map"
                                               : "rgbdtam: tracking regained");
   }
+  if (localising_ && valid) {
+    localising_ = false;
+    post_event(mavlink::kMavSeverityInfo, "rgbdtam: found in the saved map, poses in its frame");
+  }
   if ((pose.flags & kLoopCorrected) != 0) {
     post_event(mavlink::kMavSeverityInfo, "rgbdtam: loop closed, map corrected");
   }
@@ -77,9 +87,9 @@ PoseEstimate FirmwareRuntime::on_frame(const SensorFrame& frame, int64_t arrival
   }
   (void)link_.post_pose(pose, arrival_ns);
   const int64_t now = clock_();
-  LedState state = valid                                 ? LedState::kTracking
-                   : (pose.flags & kNotInitialised) != 0 ? LedState::kInitialising
-                                                         : LedState::kLost;
+  LedState state = valid                                                 ? LedState::kTracking
+                   : (pose.flags & (kNotInitialised | kLocalising)) != 0 ? LedState::kInitialising
+                                                                         : LedState::kLost;
   if (now < fault_until_ns_) state = LedState::kFault;
   link_.set_system_status(state == LedState::kTracking       ? mavlink::kMavStateActive
                           : state == LedState::kInitialising ? mavlink::kMavStateStandby

@@ -7,8 +7,6 @@
 namespace rgbdtam {
 namespace {
 constexpr int kGaussNewtonSteps = 10;
-// Edges the graph keeps per place: its measurement, and on average a few verified alignments.
-constexpr int kEdgesPerPlace = 4;
 // Places this few edges away are the keyframe's covisible neighbourhood: odometry and the
 // neighbours' edges already tie them to it, so a revisit is a place the graph reaches only
 // through a longer path (along which drift accumulates), or not at all.
@@ -317,6 +315,7 @@ int LoopModule::choose_candidates(int query_slot, PlaceCandidate* out) {
 void LoopModule::optimise() {
   const int64_t t0 = clock_();
   graph_.clear();
+  graph_.set_fixed(store_->kept());  // a map localised in stays as it was saved
   const int n = store_->size();
   for (int i = 0; i < n; ++i) {
     node_of_slot_[store_->handle(i).slot] = graph_.add_node(store_->in_order(i).T_w_k);

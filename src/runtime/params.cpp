@@ -16,6 +16,22 @@ void print_residuals(const void* field, char* out, size_t size) {
   static_cast<const ResidualConfig*>(field)->name(out, static_cast<int>(size));
 }
 
+bool parse_map_mode(const char* value, void* field) {
+  MapMode* mode = static_cast<MapMode*>(field);
+  if (std::strcmp(value, "slam") == 0) {
+    *mode = MapMode::kSlam;
+  } else if (std::strcmp(value, "localise") == 0) {
+    *mode = MapMode::kLocalise;
+  } else {
+    return false;
+  }
+  return true;
+}
+void print_map_mode(const void* field, char* out, size_t size) {
+  std::snprintf(out, size, "%s",
+                *static_cast<const MapMode*>(field) == MapMode::kSlam ? "slam" : "localise");
+}
+
 #define RGBDTAM_FIELD(expr) [](void* p) -> void* { return &static_cast<Params*>(p)->expr; }
 
 // The schema. Keys are stable: a removed key keeps its line as a comment.
@@ -124,6 +140,9 @@ const KeySpec kSpecs[] = {
      RGBDTAM_FIELD(map_min_baseline_ratio), false},
     {"map.seeds", ValueType::kInt, 100, 100000, "", "edge pixels mapped per keyframe",
      RGBDTAM_FIELD(map_seeds), false},
+    {"map.mode", ValueType::kCustom, 0, 0, "",
+     "slam: a loaded map is extended; localise: tracked in, never changed or written",
+     RGBDTAM_FIELD(map_mode), false, parse_map_mode, print_map_mode},
     {"loop.enabled", ValueType::kBool, 0, 1, "",
      "loop closure, relocalisation and map reuse (needs loop.vocabulary)",
      RGBDTAM_FIELD(loop.enabled), false},

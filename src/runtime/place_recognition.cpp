@@ -34,7 +34,7 @@ PlaceRecord* PlaceStore::begin_insert() {
   if (size_ == capacity_) {
     slot = first_;
     database_.remove(slot);
-    first_ = (first_ + 1) % capacity_;
+    first_ = kept_ + (first_ - kept_ + 1) % (capacity_ - kept_);
     --size_;
     evicted_.fetch_add(1, std::memory_order_relaxed);
   } else {
@@ -45,6 +45,13 @@ PlaceRecord* PlaceStore::begin_insert() {
   r.features.clear();
   r.bow.clear();
   return &r;
+}
+
+void PlaceStore::keep_oldest(int count) {
+  RGBDTAM_ASSERT(count >= 0 && count < capacity_ && count <= size_ && first_ == kept_,
+                 "the kept records are the oldest, with room for a ring after them");
+  kept_ = count;
+  first_ = count;
 }
 
 void PlaceStore::commit() {

@@ -40,6 +40,7 @@ Status SlamSystem::init(const Params& params, ClockFn clock, MapSink* sink,
   params_ = params;
   RGBDTAM_RETURN_IF_ERROR(tracking_.init(params, &keyframes_));
   loop_on_ = params.loop.enabled && vocabulary != nullptr;
+  vocabulary_ = vocabulary;
   if (loop_on_) {
     constexpr int kCorrectionSlots = 2;
     loop_queue_.allocate(params.loop.queue_keyframes, params.camera);
@@ -54,6 +55,39 @@ Status SlamSystem::init(const Params& params, ClockFn clock, MapSink* sink,
     tracking_.connect_mapper(&queue_);
   }
   return Status::ok();
+}
+
+Status SlamSystem::load_map(const uint8_t* data, size_t size, MapFileInfo* info) {
+  if (!loop_on_) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "a map file needs loop closure (loop.enabled and its vocabulary)");
+  }
+  RGBDTAM_RETURN_IF_ERROR(
+      rgbdtam::load_map(data, size, params_, *vocabulary_, &places_, &loop_, info));
+  if (params_.map_mode == MapMode::kLocalise) {
+    // The map's places stay; the frames' own keyframes come and go in what is left.
+    constexpr int kMinWorkingPlaces = 8;
+    const uint32_t needed = info->places + kMinWorkingPlaces;
+    if (static_cast<uint32_t>(places_.capacity()) < needed) {
+      return Status::error(StatusCode::kOutOfRange,
+                           "map.mode = localise keeps the map's %u places and needs room for %d "
+                           "more: loop.places is %d, set it to at least %u",
+                           info->places, kMinWorkingPlaces, places_.capacity(), needed);
+    }
+    std::lock_guard<std::mutex> lock(places_.mutex());
+    places_.keep_oldest(static_cast<int>(info->places));
+  }
+  tracking_.start_in_loaded_map(info->next_keyframe_id);
+  return Status::ok();
+}
+
+Status SlamSystem::write_map(MapFileInfo meta, ByteSink* out) const {
+  RGBDTAM_ASSERT(loop_on_ && finished_, "a map is written after finish(), with loop closure on");
+  meta.camera = params_.camera;
+  meta.vocabulary_checksum = vocabulary_->checksum();
+  meta.vocabulary_words = static_cast<uint32_t>(vocabulary_->words());
+  meta.next_keyframe_id = tracking_.next_keyframe_id();
+  return rgbdtam::write_map(places_, loop_.edges(), meta, out);
 }
 
 Status SlamSystem::start(const ThreadPlacement& mapper, const ThreadPlacement& loop) {

@@ -16,6 +16,28 @@ void TrackingPipeline::connect_loop(LoopQueue* keyframes, CorrectionQueue* corre
   relocaliser_.allocate(params_);
 }
 
+void TrackingPipeline::start_in_loaded_map(uint32_t next_keyframe_id) {
+  RGBDTAM_ASSERT(places_ != nullptr && counters_.frames == 0, "a map is loaded before tracking");
+  next_keyframe_id_ = next_keyframe_id;
+  localising_ = true;
+}
+
+void TrackingPipeline::find_in_loaded_map(const SensorFrame& frame, PoseEstimate* out) {
+  // The map's world frame is the only one: until the camera is found in it, there is no pose
+  // (a restart would begin a world frame of its own).
+  if (!relocalise(frame, out)) {
+    out->flags |= kLocalising;
+    out->reset_counter = reset_counter_;
+    return;
+  }
+  localising_ = false;
+  out->reset_counter = reset_counter_;
+  offer_to_mapper(*out, true);
+  current_ = 1 - current_;
+  last_valid_frame_kept_ = true;
+  previous_valid_ = true;
+}
+
 TrackingPipeline::KeyframeLink TrackingPipeline::odometry_link(
     const SE3& T_w_c, const Matrix6d& tracker_information) const {
   KeyframeLink link;

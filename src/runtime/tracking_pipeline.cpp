@@ -236,6 +236,10 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
       out.flags |= kNotInitialised;
       return out;
     }
+    if (localising_) {
+      find_in_loaded_map(frame, &out);
+      return out;
+    }
     start_keyframe(frame.timestamp_ns, SE3(), restart_link(), &out);
     T_w_last_ = SE3();
     last_ns_ = frame.timestamp_ns;

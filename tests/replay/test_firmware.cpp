@@ -4,8 +4,10 @@
 // per frame, and sensor errors reach the operator as STATUSTEXT and a fault blink.
 #include <fcntl.h>
 #include <gtest/gtest.h>
+
 #include <pty.h>
 #include <unistd.h>
+#include <memory>
 
 #include <atomic>
 #include <chrono>
@@ -189,6 +191,31 @@ TEST(Firmware, ThePlaceStoreFillingIsReportedOnceAndCounted) {
     reported += t == "rgbdtam: place store full (8), forgetting oldest";
   }
   EXPECT_EQ(reported, 1) << "once, when it first fills";
+}
+
+TEST(Firmware, ABoardsMapFileIsSavedAtTheEndAndTheNextRunIsFoundInIt) {
+  const std::string map = testing::make_temp_dir("firmware_map") + "/board.map";
+  testing::Monitor first_monitor;
+  auto first = std::make_unique<RunJob>();
+  testing::run_board(&first_monitor, first.get(), {"map.file=" + map});
+  ASSERT_TRUE(first->map_saved().is_ok()) << first->map_saved().message();
+  EXPECT_EQ(first->loaded_map().places, 0u) << "none yet: made at the end";
+  const int places = first->runtime().slam().places().size();
+  EXPECT_GT(places, 0);
+
+  testing::Monitor monitor;
+  auto second = std::make_unique<RunJob>();
+  testing::run_board(&monitor, second.get(), {"map.file=" + map});
+  EXPECT_EQ(second->loaded_map().places, static_cast<uint32_t>(places));
+  int found = 0;
+  for (const std::string& t : monitor.texts) {
+    found += t == "rgbdtam: found in the saved map, poses in its frame";
+  }
+  EXPECT_EQ(found, 1);
+  ASSERT_FALSE(monitor.poses.empty());
+  // The clip starts where the first run started: the saved world's origin.
+  EXPECT_LT(monitor.poses.front().T_w_c.translation().norm(), 0.02);
+  EXPECT_TRUE(second->map_saved().is_ok());
 }
 
 TEST(Firmware, StoppingDuringARecordedGapOfAYearTakesNoLongerThanAFrame) {

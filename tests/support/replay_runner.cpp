@@ -8,10 +8,13 @@
 namespace rgbdtam::testing {
 
 ReplayOutcome replay_and_evaluate(const std::string& sequence, const std::string& config,
-                                  std::initializer_list<const char*> overrides, MapSink* map_sink) {
+                                  std::initializer_list<const char*> overrides, MapSink* map_sink,
+                                  MapFiles map_files) {
   ReplayOutcome out;
   ReplayOptions opt;
   opt.map_sink = map_sink;
+  opt.map_in_path = map_files.in;
+  opt.map_out_path = map_files.out;
   opt.sequence = sequence.c_str();
   opt.progress = false;
   if (!read_params_file(config.c_str(), &opt.params).is_ok()) return out;
@@ -19,10 +22,12 @@ ReplayOutcome replay_and_evaluate(const std::string& sequence, const std::string
     if (!set_param(o, "test", &opt.params).is_ok()) return out;
   }
   ReplayJob job;
-  if (!job.init(opt).is_ok()) return out;
+  out.status = job.init(opt);
+  if (!out.status.is_ok()) return out;
   while (job.step()) {
   }
-  if (!job.finish().is_ok()) return out;
+  out.status = job.finish();
+  if (!out.status.is_ok()) return out;
   std::vector<StampedPose> gt;
   int bad = 0;
   if (!read_tum_trajectory((sequence + "/groundtruth.txt").c_str(), &gt, &bad).is_ok()) return out;
@@ -35,6 +40,8 @@ ReplayOutcome replay_and_evaluate(const std::string& sequence, const std::string
   out.final_report = evaluate_all(gt, job.final_estimates(), &stamps);
   if (job.loop_enabled()) out.loop = job.loop().counters();
   out.counters = job.counters();
+  out.estimates = job.estimates();
+  out.found_in_map_at_frame = job.found_in_map_at_frame();
   out.tracking_median_ms = job.tracking_time().percentile_ms(0.5);
   out.ran = true;
   return out;

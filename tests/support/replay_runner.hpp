@@ -10,6 +10,9 @@ namespace rgbdtam::testing {
 
 struct ReplayOutcome {
   bool ran = false;
+  Status status;  // why it did not run
+  std::vector<StampedPose> estimates;
+  int found_in_map_at_frame = -1;  // with a map file loaded
   TrackingCounters counters;
   EvaluationReport report;
   EvaluationReport final_report;  // every tracked frame on its keyframe's final pose
@@ -17,9 +20,15 @@ struct ReplayOutcome {
   double tracking_median_ms = 0;
 };
 
+// Map files to start in and to save the final map to (either may be null).
+struct MapFiles {
+  const char* in = nullptr;
+  const char* out = nullptr;
+};
+
 ReplayOutcome replay_and_evaluate(const std::string& sequence, const std::string& config,
                                   std::initializer_list<const char*> overrides = {},
-                                  MapSink* map_sink = nullptr);
+                                  MapSink* map_sink = nullptr, MapFiles map_files = {});
 
 // The robust-tracking promise on a replayed sequence: every frame is tracked or reported lost,
 // never a wrong pose reported as tracked (false-valid), and at least min_coverage of the frames

@@ -3,7 +3,8 @@
 // edges relative poses T_from_to with an information matrix in (v, omega). Gauss-Newton on
 // right perturbations T <- T exp(delta), the normal equations solved by conjugate gradients
 // with a block-Jacobi preconditioner, so that memory and time stay linear in nodes plus edges
-// (a chain of keyframes with a few loops is sparse). The first node is held fixed (the gauge).
+// (a chain of keyframes with a few loops is sparse). The first node is held fixed (the gauge),
+// or the first few (a map being localised in).
 // optimize() never allocates.
 
 #include <memory>
@@ -31,6 +32,8 @@ class PoseGraph {
  public:
   void allocate(int max_nodes, int max_edges);
   void clear() { nodes_ = edges_ = 0; }
+  // The first `count` nodes (at least one: the gauge) keep their poses.
+  void set_fixed(int count) { fixed_ = count > 1 ? count : 1; }
   // Returns the node's index, or -1 when full.
   int add_node(const SE3& T_w_n);
   bool add_edge(int from, int to, const SE3& T_from_to, const Matrix6d& information);
@@ -52,7 +55,7 @@ class PoseGraph {
   int solve(int max_iterations);  // conjugate gradients into delta_
   void multiply(const Vector6d* x, Vector6d* out) const;
 
-  int nodes_ = 0, edges_ = 0, max_nodes_ = 0, max_edges_ = 0;
+  int nodes_ = 0, edges_ = 0, max_nodes_ = 0, max_edges_ = 0, fixed_ = 1;
   std::unique_ptr<SE3[]> pose_;
   std::unique_ptr<Edge[]> edge_;
   std::unique_ptr<Matrix6d[]> H_diag_, preconditioner_;

@@ -44,6 +44,8 @@ class Vocabulary {
   static Status parse(const uint8_t* data, size_t size, Vocabulary* out);
 
   int words() const { return words_; }
+  // The file's checksum: what a map file records of the vocabulary its places were described in.
+  uint32_t checksum() const { return checksum_; }
   int nodes() const { return nodes_count_; }
   int branching() const { return branching_; }
   int depth() const { return depth_; }
@@ -60,6 +62,7 @@ class Vocabulary {
   int words_ = 0;
   int branching_ = 0;
   int depth_ = 0;
+  uint32_t checksum_ = 0;
 };
 
 // DBoW2's L1 score of two BoW vectors: 1 for the same words in the same proportions, 0 for none

@@ -26,8 +26,9 @@ struct Board {
   char sensor_colour[kTextBytes] = "yuyv";       // v4l2: yuyv or mjpeg (the colour node's format)
   char sensor_depth[kTextBytes] = "registered";  // freenect: registered (mm) or raw (11-bit)
   char sensor_usb_id[kTextBytes] = "";           // vvvv:pppp that must be attached; "" = none
-  char sysfs_root[kTextBytes] = "/sys";          // where sysfs is mounted
-  char devfs_root[kTextBytes] = "/dev";          // where devtmpfs is (usbfs nodes for a reset)
+  char map_file[kTextBytes] = "";        // a saved map to start in and to save to; "" = none
+  char sysfs_root[kTextBytes] = "/sys";  // where sysfs is mounted
+  char devfs_root[kTextBytes] = "/dev";  // where devtmpfs is (usbfs nodes for a reset)
   double sensor_fps = 30.0;
   int sensor_stall_ms = 1000;          // no frame for this long: reset and reopen the sensor
   int sensor_reopen_budget_ms = 3000;  // reopen attempts after a reset, within this time

@@ -37,6 +37,9 @@ class FirmwareRuntime {
   // vocabulary: for loop closure and relocalisation (null: off).
   Status init(const Params& params, const Board& board, ByteLink* link, GpioOutputs* gpio,
               ClockFn clock, const Vocabulary* vocabulary = nullptr);
+  // After init, before start: a saved map to start in (SlamSystem::load_map); the first pose
+  // found in it is announced on the link.
+  Status load_map(const uint8_t* data, size_t size, MapFileInfo* info);
   // Places the calling thread as the tracker and starts the mapper and link threads, as the
   // board says. on_frame() must then be called from this same thread.
   Status start();
@@ -73,6 +76,7 @@ class FirmwareRuntime {
   bool lost_ = false;
   bool pool_full_reported_ = false;
   bool place_store_full_reported_ = false;
+  bool localising_ = false;     // a map was loaded and no pose has been found in it yet
   int64_t fault_until_ns_ = 0;  // the LED shows a fault for a while after a sensor error
   bool started_ = false;
 };

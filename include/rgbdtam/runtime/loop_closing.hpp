@@ -76,6 +76,14 @@ struct CandidateBudget {
 
 class LoopModule {
  public:
+  // Edges the graph keeps per place: its measurement, and on average a few verified alignments.
+  static constexpr int kEdgesPerPlace = 4;
+  struct Edge {
+    PlaceHandle from, to;
+    SE3 T_from_to;
+    Matrix6d information;  // of T_from_to exp(xi)
+    EdgeKind kind;
+  };
   Status init(const Params& params, const Vocabulary* vocabulary, PlaceStore* store,
               CorrectionQueue* corrections, ClockFn clock);
   void step(const LoopKeyframe& message);
@@ -88,14 +96,13 @@ class LoopModule {
   const LatencyStats& optimise_time() const { return optimise_time_; }
   // Bytes init() takes besides the place store, for the memory budget.
   static size_t bytes_needed(const Params& params);
+  // The graph's edges (some may name forgotten places); the loop module's thread, or after
+  // finish().
+  const FixedVector<Edge>& edges() const { return edges_; }
+  // A loaded map's edge, after init and before the first step; false when the graph is full.
+  bool restore_edge(const Edge& edge) { return edges_.push_back(edge); }
 
  private:
-  struct Edge {
-    PlaceHandle from, to;
-    SE3 T_from_to;
-    Matrix6d information;  // of T_from_to exp(xi)
-    EdgeKind kind;
-  };
   void add_keyframe(const LoopKeyframe& keyframe);
   void add_reuse(const LoopKeyframe& message);
   void remember(const LoopKeyframe& keyframe, const SE3& T_w_k);

@@ -37,6 +37,7 @@ enum PoseFlags : uint32_t {
   kRelocalised = 1u << 7,     // lost, then found again in the map (with kReset)
   kLoopCorrected = 1u << 8,   // a loop closure moved the map (with kReset)
   kSettling = 1u << 9,        // tracked, but withheld: too soon after a correction to compare poses
+  kLocalising = 1u << 10,     // a map was loaded and this frame is not found in it yet: no pose
 };
 
 // Pipeline -> trajectory writer, link. One per input frame.

@@ -55,6 +55,12 @@ struct LoopParams {
   double max_reported_jump_rad = 2.5 * M_PI / 180.0;
 };
 
+// What a run does with a map file it loads (--map-in, a board's map.file).
+enum class MapMode {
+  kSlam,      // extend it, and save it where asked
+  kLocalise,  // track in it and leave it as it is: its places stay, the file is never written
+};
+
 struct Params {
   PinholeIntrinsics camera{517.3, 516.5, 318.6, 255.3, 640, 480};
   RadTanDistortion distortion;
@@ -81,6 +87,7 @@ struct Params {
   // 0.91 cm at 0.005 and 0.01, 0.88 at 0.02, 0.87 at 0.03 (0.88 without mapping).
   double map_min_baseline_ratio = 0.03;
   int map_seeds = 10000;  // edge pixels mapped per keyframe
+  MapMode map_mode = MapMode::kSlam;
   LoopParams loop;
 };
 

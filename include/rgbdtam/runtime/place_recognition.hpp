@@ -7,8 +7,8 @@
 // the map remembers far more places than the pool holds. Records live in slots of fixed capacity; a
 // handle (slot, generation) goes stale when its slot is reused. Policy when full: the oldest record
 // is evicted (counted), as a ring: a robot that runs for hours keeps the places of its last
-// `loop.places` keyframes. Threads: the loop module writes, the tracker reads (relocalisation);
-// both under mutex().
+// `loop.places` keyframes (less those kept, keep_oldest). Threads: the loop module writes, the
+// tracker reads (relocalisation); both under mutex().
 
 #include <atomic>
 #include <mutex>
@@ -47,6 +47,10 @@ class PlaceStore {
   void commit();
   int size() const { return size_; }
   int capacity() const { return capacity_; }
+  // The oldest `count` records are never forgotten (a map loaded to localise in); the rest of
+  // the store is the ring. Under the lock, with fewer than capacity() records.
+  void keep_oldest(int count);
+  int kept() const { return kept_; }
   // Records forgotten to make room; read from any thread (the firmware reports the first).
   uint32_t evicted() const { return evicted_.load(std::memory_order_relaxed); }
   // Oldest first.
@@ -66,12 +70,15 @@ class PlaceStore {
                              const PinholeIntrinsics& camera);
 
  private:
-  int slot_of(int order) const { return (first_ + order) % capacity_; }
+  // Kept records are in the first slots; the ring's oldest is at first_.
+  int slot_of(int order) const {
+    return order < kept_ ? order : kept_ + (first_ - kept_ + order - kept_) % (capacity_ - kept_);
+  }
 
   std::mutex mutex_;
   std::unique_ptr<PlaceRecord[]> records_;
   PlaceDatabase database_;
-  int capacity_ = 0, size_ = 0, first_ = 0;
+  int capacity_ = 0, size_ = 0, first_ = 0, kept_ = 0;
   std::atomic<uint32_t> evicted_{0};
   mutable std::atomic<uint32_t> stale_lookups_{0};
 };

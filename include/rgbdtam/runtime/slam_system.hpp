@@ -3,6 +3,7 @@
 // mapper, stepped synchronously after each frame (deterministic replay) or on its own thread.
 // init() allocates everything, start() starts the mapper thread; process() never allocates.
 
+#include "rgbdtam/runtime/map_file.hpp"
 #include "rgbdtam/runtime/mapping.hpp"
 #include "rgbdtam/runtime/thread_placement.hpp"
 #include "rgbdtam/runtime/tracking_pipeline.hpp"
@@ -27,6 +28,11 @@ class SlamSystem {
   // vocabulary: loop closure and relocalisation need one (loop.enabled); null turns them off.
   Status init(const Params& params, ClockFn clock, MapSink* sink,
               const Vocabulary* vocabulary = nullptr);
+  // After init, before start: the places and graph of a map file (loop closure on). Tracking
+  // then reports no pose until it finds the camera among them; poses are in the map's world.
+  Status load_map(const uint8_t* data, size_t size, MapFileInfo* info);
+  // After finish(): the places and graph as a map file. meta: time and writer.
+  Status write_map(MapFileInfo meta, ByteSink* out) const;
   // Starts the mapper's and loop module's threads when map.threaded, loop.threaded (after
   // init, as every thread is).
   Status start(const ThreadPlacement& mapper = ThreadPlacement(),
@@ -62,6 +68,7 @@ class SlamSystem {
   MappingModule mapper_;
   MappingThread thread_;
   bool loop_on_ = false;
+  const Vocabulary* vocabulary_ = nullptr;
   LoopQueue loop_queue_;
   CorrectionQueue corrections_;
   PlaceStore places_;

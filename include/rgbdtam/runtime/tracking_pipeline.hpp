@@ -51,6 +51,11 @@ class TrackingPipeline {
   void connect_loop(LoopQueue* keyframes, CorrectionQueue* corrections, PlaceStore* places,
                     const Vocabulary* vocabulary);
 
+  // A map was loaded into the places: no pose is reported until a frame is found among them,
+  // and keyframes are numbered after the map's. Init time, after connect_loop.
+  void start_in_loaded_map(uint32_t next_keyframe_id);
+  uint32_t next_keyframe_id() const { return next_keyframe_id_; }
+
   const TrackingCounters& counters() const { return counters_; }
   const KeyframePool& keyframes() const { return *pool_; }
   const Params& params() const { return params_; }
@@ -81,6 +86,7 @@ class TrackingPipeline {
   uint32_t failed_checks(const TrackResult& r, Keyframe* kf, int64_t t_ns);
   bool unique_along_weak_direction(const TrackResult& r, Keyframe* kf);
   bool relocalise(const SensorFrame& frame, PoseEstimate* out);
+  void find_in_loaded_map(const SensorFrame& frame, PoseEstimate* out);
   void adopt_corrections();
   void apply_correction(const LoopCorrection& c);
   // A free slot of the loop module's queue, or null (no loop module, or full: counted).
@@ -130,6 +136,7 @@ class TrackingPipeline {
   uint32_t pending_flags_ = 0;     // for the next output: a correction moved the map
   int64_t withhold_until_ns_ = 0;  // poses up to this time are tracked but not reported valid
   uint32_t next_keyframe_id_ = 0;
+  bool localising_ = false;  // in a loaded map, not found in it yet
   struct PendingKeyframe {
     bool due = false;
     int frame_buffer = 0;  // frames_[frame_buffer] is the keyframe's frame
