@@ -5,26 +5,32 @@
 #   png_decoder      PNG decoding through our arena, as grey and as depth (libpng and zlib are
 #                    Debian's uninstrumented builds: guidance covers our code, ASan all of it)
 #   text_formats     TUM lists, configs, boards, --set/--board-set values, trajectories
+#   map_file         map files, as replay and run load them and as the exporters read them
 #   tools/fuzz.sh [seconds] [target...]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 seconds=${1:-60}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(mavlink_decoder png_decoder text_formats)
+[ ${#targets[@]} -gt 0 ] || targets=(mavlink_decoder png_decoder text_formats map_file)
 command -v clang++ >/dev/null || tools/setup.sh --fuzz
 out=build/fuzz
 mkdir -p "$out"
 flags=(-std=c++17 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all -Iinclude
        -isystem /usr/include/eigen3)
 
-build() {  # name, sources... (compiled in parallel, then linked)
-  local name=$1 objects=()
+# Objects are shared by the targets of one run (the core is compiled once), never across runs.
+rm -rf "$out/obj"
+mkdir -p "$out/obj"
+build() {  # name, sources... (the ones not yet compiled in parallel, then linked)
+  local name=$1 objects=() missing=()
   shift
-  mkdir -p "$out/obj_$name"
-  for src in "$@"; do objects+=("$out/obj_$name/$(echo "$src" | tr / _).o"); done
-  printf '%s\n' "$@" | xargs -P "$(nproc)" -I{} sh -c \
-    'clang++ "$@" -c {} -o "'"$out/obj_$name"'/$(echo {} | tr / _).o"' _ "${flags[@]}"
+  for src in "$@"; do
+    objects+=("$out/obj/$(echo "$src" | tr / _).o")
+    [ -f "${objects[-1]}" ] || missing+=("$src")
+  done
+  [ ${#missing[@]} -eq 0 ] || printf '%s\n' "${missing[@]}" | xargs -P "$(nproc)" -I{} sh -c \
+    'clang++ "$@" -c {} -o "'"$out/obj"'/$(echo {} | tr / _).o"' _ "${flags[@]}"
   clang++ "${flags[@]}" "${objects[@]}" -lpng -lz -o "$out/fuzz_$name"
 }
 
@@ -43,6 +49,8 @@ seed_text_formats() {  # the first byte chooses the format (fuzz_text_formats.cp
   printf '\x04tracker.robust_c=3' >"$1/seed$n"
 }
 
+seed_map_file() { RGBDTAM_WRITE_MAP_SEEDS="$1" "$out/fuzz_map_file"; }
+
 fuzzers=()
 for t in "${targets[@]}"; do
   case $t in
@@ -53,6 +61,10 @@ for t in "${targets[@]}"; do
         src/hal/tum_timestamp.cpp src/hal/file.cpp src/hal/clock.cpp src/hal/png_decoder.cpp \
         src/runtime/board.cpp src/runtime/params.cpp src/runtime/key_value.cpp \
         tests/fuzz/fuzz_text_formats.cpp ;;
+    map_file)
+      build "$t" src/core/*.cpp src/runtime/map_file.cpp src/runtime/place_recognition.cpp \
+        src/runtime/loop_closing.cpp src/runtime/map_checkpoint.cpp src/runtime/params.cpp \
+        src/runtime/key_value.cpp src/runtime/latency_stats.cpp tests/fuzz/fuzz_map_file.cpp ;;
     *) echo "unknown fuzz target $t" >&2; exit 2 ;;
   esac
   corpus="$out/corpus_$t"

@@ -33,8 +33,10 @@ if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 # libopenni2-dev: the OpenNI2 backend of the dynamic build, and its Dummy device for tests.
 # libjpeg62-turbo-dev: MJPEG colour from UVC cameras (libjpeg-turbo's static libjpeg.a);
 # libmicrohttpd-dev: the monitor's live page.
+# liboctomap-dev: rgbdtam-octomap (host only); octomap-tools: OctoMap's own tools open its files.
 packages=(build-essential cmake ninja-build libeigen3-dev libpng-dev zlib1g-dev libgpiod-dev
-  googletest file python3-open3d libfreenect-dev libopenni2-dev libjpeg62-turbo-dev libmicrohttpd-dev)
+  googletest file python3-open3d libfreenect-dev libopenni2-dev libjpeg62-turbo-dev libmicrohttpd-dev
+  liboctomap-dev octomap-tools)
 # tools/mavlink-check decodes the link with node-mavlink and drives Chromium with
 # playwright-core (both pinned in its lockfile). A Node that is already there (with its npm) is
 # used as it is.

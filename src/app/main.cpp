@@ -46,6 +46,8 @@ void usage() {
       "  rgbdtam record --board <board-folder> <out-dir> [--board-set key=value]...\n"
       "                 [--max-frames N]\n"
       "  rgbdtam map info <file>\n"
+      "  rgbdtam map export <file> --grid <prefix> [--png] [--resolution m]\n"
+      "                     [--heights low,high] [--max-range m] [--board <folder> | --up x,y,z]\n"
       "  rgbdtam vocabulary train <sequence-dir>... --config <file> --out <file>\n"
       "  rgbdtam --version\n"
       "sensor backends in this build: " RGBDTAM_HAL_BACKENDS "\n");

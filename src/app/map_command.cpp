@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "config_files.hpp"
+#include "map_export.hpp"
 #include "rgbdtam/runtime/map_file.hpp"
 
 namespace rgbdtam {
@@ -41,11 +42,49 @@ int info_command(const char* path) {
   std::printf("vocabulary: %u words, checksum %08x\n", m.vocabulary_words, m.vocabulary_checksum);
   return 0;
 }
+// argv: <file> --grid <prefix> [export options]
+int export_command(int argc, char** argv) {
+  const char* grid = nullptr;
+  MapExportOptions options;
+  Status s;
+  for (int i = 1; i < argc && s.is_ok(); ++i) {
+    if (std::strcmp(argv[i], "--grid") == 0 && i + 1 < argc) {
+      grid = argv[++i];
+    } else if (std::strcmp(argv[i], "--png") == 0) {
+      options.png = true;
+    } else if (!take_map_export_arg(argc, argv, &i, &options, &s)) {
+      s = Status::error(StatusCode::kInvalidArgument, "unknown argument %s", argv[i]);
+    }
+  }
+  if (s.is_ok() && grid == nullptr) {
+    s = Status::error(StatusCode::kInvalidArgument, "--grid <prefix> is required");
+  }
+  LoadedMap map;
+  LevelFrame level;
+  if (s.is_ok()) s = level_frame_of(options, &level);
+  if (s.is_ok()) s = read_map_for_export(argv[0], &map);
+  if (s.is_ok()) {
+    std::printf("map: %s, %d places\nlevel: %s\n", argv[0], map.places.size(), level.source);
+    s = export_occupancy_grid(map, level, options, grid);
+  }
+  if (!s.is_ok()) {
+    std::fprintf(stderr, "rgbdtam map export: %s\n", s.message());
+    return 1;
+  }
+  return 0;
+}
+
+constexpr const char* kUsage =
+    "usage: rgbdtam map info <file>\n"
+    "       rgbdtam map export <file> --grid <prefix> [--png] [--resolution m]\n"
+    "                          [--heights low,high] [--max-range m]\n"
+    "                          [--board <folder> | --up x,y,z]\n";
 }  // namespace
 
 int map_command(int argc, char** argv) {
   if (argc == 2 && std::strcmp(argv[0], "info") == 0) return info_command(argv[1]);
-  std::fprintf(stderr, "usage: rgbdtam map info <file>\n");
+  if (argc >= 2 && std::strcmp(argv[0], "export") == 0) return export_command(argc - 1, argv + 1);
+  std::fprintf(stderr, "%s", kUsage);
   return 2;
 }
 

@@ -22,8 +22,10 @@ Status load_map_file(const char* path, const Params& params, System* system, Map
   if (!s.is_ok()) return Status::error(s.code(), "%s: %s", path, s.message());
   return s;
 }
+// A map file's header fields for this build (written_by: version, commit, board) and now.
+MapFileInfo map_written_by(const char* written_by);
 // The system's map into `path`: written beside it, synced, renamed over it and the folder
-// synced. written_by: the build (version, commit, board). After the system's finish().
+// synced (AtomicFileWriter). After the system's finish().
 Status save_map_file(const char* path, const SlamSystem& system, const char* written_by);
 
 }  // namespace rgbdtam

@@ -49,7 +49,9 @@ Status ReplayJob::init(const ReplayOptions& options) {
       system_.init(p, monotonic_ns, options.map_sink, loop ? &vocabulary_ : nullptr));
   system_.set_loop_observer(options.loop_observer);
   if (options.map_in_path != nullptr) {
+    const int64_t t0 = monotonic_ns();
     RGBDTAM_RETURN_IF_ERROR(load_map_file(options.map_in_path, p, &system_, &loaded_map_));
+    map_load_ns_ = monotonic_ns() - t0;
   }
   RGBDTAM_RETURN_IF_ERROR(system_.start());
   if (options.trajectory_path != nullptr) {
@@ -125,7 +127,9 @@ Status ReplayJob::finish() {
     final_estimates_.push_back({f.t_s, placed ? T_w_k * f.T_k_c : f.T_w_c});
   }
   if (options_.map_out_path != nullptr && closed.is_ok() && system_.loop_enabled()) {
+    const int64_t t0 = monotonic_ns();
     closed = save_map_file(options_.map_out_path, system_, options_.written_by);
+    map_save_ns_ = closed.is_ok() ? monotonic_ns() - t0 : 0;
   }
   if (options_.final_trajectory_path != nullptr && closed.is_ok()) {
     TrajectoryWriter final_writer;
@@ -177,13 +181,17 @@ void ReplayJob::print_summary() const {
   }
   print_loop_summary(system_);
   if (loaded_map_.places > 0) {
-    std::printf("map file: %s, %u places and %u graph edges loaded; ", options_.map_in_path,
-                loaded_map_.places, loaded_map_.edges);
+    std::printf("map file: %s, %u places and %u graph edges loaded in %.0f ms; ",
+                options_.map_in_path, loaded_map_.places, loaded_map_.edges, map_load_ns_ * 1e-6);
     if (found_in_map_at_frame_ >= 0) {
       std::printf("found in it at frame %d\n", found_in_map_at_frame_);
     } else {
       std::printf("never found in it (no pose reported)\n");
     }
+  }
+  if (map_save_ns_ > 0) {
+    std::printf("map file: %s, %d places saved in %.0f ms (written, synced and renamed)\n",
+                options_.map_out_path, system_.places().size(), map_save_ns_ * 1e-6);
   }
   std::printf("memory: %.0f MB allocated at init (half of this machine's memory is the budget)\n",
               static_cast<double>(memory_needed_bytes_) / (1 << 20));

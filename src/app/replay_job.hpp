@@ -90,6 +90,7 @@ class ReplayJob {
   uint64_t memory_needed_bytes_ = 0;
   MapFileInfo loaded_map_;
   int found_in_map_at_frame_ = -1;  // the first valid pose's frame (from 0) after loading
+  int64_t map_load_ns_ = 0, map_save_ns_ = 0;
   int64_t started_ns_ = 0, finished_ns_ = 0;
 };
 

@@ -222,9 +222,15 @@ Status RunJob::open_map_file(bool loop) {
                            "map.mode = localise needs a saved map: map.file %s does not exist",
                            board_.map_file);
     }
-    return Status::ok();
+  } else {
+    RGBDTAM_RETURN_IF_ERROR(load_map_file(board_.map_file, params_, runtime_.get(), &loaded_map_));
   }
-  return load_map_file(board_.map_file, params_, runtime_.get(), &loaded_map_);
+  if (params_.map_mode != MapMode::kSlam || board_.map_save_period_s == 0) return Status::ok();
+  RGBDTAM_RETURN_IF_ERROR(checkpoint_file_.init(board_.map_file));
+  checkpoint_.init(int64_t{board_.map_save_period_s} * 1'000'000'000,
+                   runtime_->slam().map_meta(map_written_by(options_.written_by)),
+                   &checkpoint_file_, monotonic_ns, unix_time_ns);
+  return runtime_->set_map_checkpoint(&checkpoint_);
 }
 
 Status RunJob::start() {
@@ -356,11 +362,15 @@ void RunJob::print_summary() const {
               m.time_per_keyframe().max_ms(), m.counters().keyframes_mapped);
   print_loop_summary(runtime_->slam());
   if (board_.map_file[0] != '\0') {
-    std::printf("map file: %s: %u places loaded%s; %s\n", board_.map_file, loaded_map_.places,
+    std::printf("map file: %s: %u places loaded%s; %s; %u saves while running, %u failed%s%s\n",
+                board_.map_file, loaded_map_.places,
                 params_.map_mode == MapMode::kLocalise ? " (localise: never written)" : "",
                 params_.map_mode == MapMode::kLocalise ? "left as it was"
-                : map_saved_.is_ok()                   ? "saved"
-                                                       : map_saved_.message());
+                : map_saved_.is_ok()                   ? "saved at the end"
+                                                       : map_saved_.message(),
+                checkpoint_.saves(), checkpoint_.failures(),
+                checkpoint_.failures() > 0 ? ", the last: " : "",
+                checkpoint_.failures() > 0 ? checkpoint_.last_failure().message() : "");
   }
   const LinkTask& l = runtime_->link();
   const PoseLinkCounters& lc = l.counters();

@@ -6,6 +6,7 @@
 #include <atomic>
 #include <memory>
 
+#include "rgbdtam/hal/atomic_file.hpp"
 #include "rgbdtam/hal/gpio.hpp"
 #include "rgbdtam/hal/replay_sensor.hpp"
 #include "rgbdtam/hal/sensor_recovery.hpp"
@@ -76,6 +77,8 @@ class RunJob {
   // The board's map.file: what was loaded (places = 0: none), and how saving it went.
   const MapFileInfo& loaded_map() const { return loaded_map_; }
   const Status& map_saved() const { return map_saved_; }
+  // Saves while running (map.save_period_s): how many, and how many failed.
+  const MapCheckpoint& map_checkpoint() const { return checkpoint_; }
 
   const FirmwareRuntime& runtime() const { return *runtime_; }
   const Board& board() const { return board_; }
@@ -96,6 +99,8 @@ class RunJob {
   std::unique_ptr<FirmwareRuntime> runtime_;
   MapFileInfo loaded_map_;
   Status map_saved_;
+  AtomicFileWriter checkpoint_file_;
+  MapCheckpoint checkpoint_;
   std::atomic<bool> stop_requested_{false};
   int64_t started_ns_ = 0;
   int64_t last_progress_ns_ = 0;

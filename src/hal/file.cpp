@@ -80,9 +80,6 @@ OutputFile::~OutputFile() {
   if (file_ != nullptr) std::fclose(file_);
 }
 
-namespace {
-// Best effort: a folder that cannot be opened or synced (some network file systems) leaves the
-// rename to the kernel's own schedule.
 void sync_folder_of(const char* path) {
   char folder[PATH_MAX];
   std::snprintf(folder, sizeof(folder), "%s", path);
@@ -99,7 +96,6 @@ void sync_folder_of(const char* path) {
   (void)::fsync(fd);
   ::close(fd);
 }
-}  // namespace
 
 Status OutputFile::open(const char* path, char* buffer, size_t size) {
   if (std::snprintf(path_, sizeof(path_), "%s", path) >= static_cast<int>(sizeof(path_))) {

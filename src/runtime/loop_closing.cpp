@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "rgbdtam/runtime/map_checkpoint.hpp"
+
 namespace rgbdtam {
 namespace {
 constexpr int kGaussNewtonSteps = 10;
@@ -103,6 +105,11 @@ void LoopModule::step(const LoopKeyframe& message) {
   } else {
     add_keyframe(message);
   }
+  if (checkpoint_ != nullptr) checkpoint_->changed();
+}
+
+void LoopModule::tick() {
+  if (checkpoint_ != nullptr) checkpoint_->save_if_due(*store_, edges_);
 }
 
 void LoopModule::add_keyframe(const LoopKeyframe& keyframe) {

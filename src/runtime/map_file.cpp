@@ -11,6 +11,11 @@ namespace {
 constexpr char kMagic[8] = {'R', 'G', 'B', 'D', 'T', 'M', 'A', 'P'};
 constexpr size_t kHeaderBytes = 8 + 4 + 4 + 8 + 32 + 8 + 16 + 8 + 8 + 96 + 48;
 constexpr size_t kChecksumBytes = 4;
+// A place without its features, words and view; a feature; a word; an edge.
+constexpr size_t kPlaceBytes = 4 + 8 + 7 * 8 + 4 + 4;
+constexpr size_t kFeatureBytes = 32 + 5 * 4, kWordBytes = 8, kEdgeBytes = 8 + 4 + 7 * 8 + 36 * 8;
+constexpr int kLargestSide = 1 << 14;
+constexpr uint32_t kMostWords = 1u << 22;  // the shipped vocabulary has 10^4
 constexpr int kLastEdgeKind = static_cast<int>(EdgeKind::kReuse);
 
 // Fields through to the sink, hashed on the way.
@@ -71,6 +76,49 @@ bool same_camera(const PinholeIntrinsics& a, const PinholeIntrinsics& b) {
   return a.width_px == b.width_px && a.height_px == b.height_px && close(a.fx_px, b.fx_px) &&
          close(a.fy_px, b.fy_px) && close(a.cx_px, b.cx_px) && close(a.cy_px, b.cy_px);
 }
+// The places after the header, into a store with room for them; r is left at the edges.
+Status read_places(const MapFileInfo& m, ByteReader* r, PlaceStore* places) {
+  const size_t view_pixels = static_cast<size_t>(m.view_width_px) * m.view_height_px;
+  std::lock_guard<std::mutex> lock(places->mutex());
+  for (uint32_t i = 0; i < m.places; ++i) {
+    PlaceRecord* p = places->begin_insert();
+    p->keyframe_id = r->get<uint32_t>();
+    p->timestamp_ns = r->get<int64_t>();
+    const bool ids_grow =
+        i == 0 || p->keyframe_id > places->in_order(places->size() - 1).keyframe_id;
+    if (!read_pose(r, &p->T_w_k) || !ids_grow || p->keyframe_id >= m.next_keyframe_id) {
+      return corrupt("place", i);
+    }
+    const uint32_t features = r->get<uint32_t>();
+    if (features > m.most_features) return corrupt("place", i);
+    for (uint32_t k = 0; k < features; ++k) {
+      Feature f;
+      for (uint64_t& b : f.descriptor.bits) b = r->get<uint64_t>();
+      for (float* v : {&f.u_px, &f.v_px, &f.x_m, &f.y_m, &f.z_m}) *v = r->get<float>();
+      if (!std::isfinite(f.x_m) || !std::isfinite(f.y_m) || !std::isfinite(f.z_m)) {
+        return corrupt("place", i);
+      }
+      (void)p->features.push_back(f);
+    }
+    const uint32_t words = r->get<uint32_t>();
+    if (words > static_cast<uint32_t>(p->bow.capacity())) return corrupt("place", i);
+    for (uint32_t k = 0; k < words; ++k) {
+      BowEntry e;
+      e.word = r->get<uint32_t>();
+      e.weight = r->get<float>();
+      const bool sorted = k == 0 || e.word > p->bow[static_cast<int>(k) - 1].word;
+      if (e.word >= m.vocabulary_words || !sorted || !std::isfinite(e.weight)) {
+        return corrupt("place", i);
+      }
+      (void)p->bow.push_back(e);
+    }
+    r->bytes(p->view.gray.data(), view_pixels);
+    r->bytes(p->view.inverse_depth.data(), sizeof(uint16_t) * view_pixels);
+    if (!r->ok()) return corrupt("place", i);
+    places->commit();
+  }
+  return Status::ok();
+}
 }  // namespace
 
 Status write_map(const PlaceStore& places, const FixedVector<LoopModule::Edge>& edges,
@@ -86,6 +134,7 @@ Status write_map(const PlaceStore& places, const FixedVector<LoopModule::Edge>& 
   for (int i = 0; i < places.size(); ++i) {
     const PlaceRecord& r = places.in_order(i);
     meta.most_features = std::max(meta.most_features, static_cast<uint32_t>(r.features.size()));
+    meta.next_keyframe_id = std::max(meta.next_keyframe_id, r.keyframe_id + 1);
     for (int k = 0; k < 3; ++k) {
       meta.lowest_m[k] = std::min(meta.lowest_m[k], r.T_w_k.translation()[k]);
       meta.highest_m[k] = std::max(meta.highest_m[k], r.T_w_k.translation()[k]);
@@ -150,10 +199,8 @@ Status write_map(const PlaceStore& places, const FixedVector<LoopModule::Edge>& 
 }
 
 size_t map_file_bytes_at_most(const Params& params) {
-  constexpr size_t kFeatureBytes = 32 + 5 * 4, kWordBytes = 8, kEdgeBytes = 8 + 4 + 7 * 8 + 36 * 8;
   const size_t per_place =
-      4 + 8 + 7 * 8 + 4 + 4 +
-      static_cast<size_t>(params.loop.features) * (kFeatureBytes + kWordBytes) +
+      kPlaceBytes + static_cast<size_t>(params.loop.features) * (kFeatureBytes + kWordBytes) +
       View::bytes(params.camera);
   const size_t places = static_cast<size_t>(params.loop.places);
   return kHeaderBytes + places * per_place + places * LoopModule::kEdgesPerPlace * kEdgeBytes +
@@ -196,6 +243,28 @@ Status read_map_info(const uint8_t* data, size_t size, MapFileInfo* info) {
   for (double& v : m.lowest_m) v = r.get<double>();
   for (double& v : m.highest_m) v = r.get<double>();
   m.file_bytes = size;
+  // Counts a file of this size cannot hold are damage, whatever the checksum says: nothing is
+  // sized from them.
+  const bool camera_ok = m.camera.width_px >= 16 && m.camera.height_px >= 16 &&
+                         m.camera.width_px <= kLargestSide && m.camera.height_px <= kLargestSide &&
+                         std::isfinite(m.camera.fx_px) && std::isfinite(m.camera.fy_px) &&
+                         std::isfinite(m.camera.cx_px) && std::isfinite(m.camera.cy_px) &&
+                         m.camera.fx_px > 0 && m.camera.fy_px > 0;
+  if (!camera_ok) return Status::error(StatusCode::kCorrupt, "map file: camera model damaged");
+  const PinholeIntrinsics view = View::intrinsics(m.camera);
+  if (m.view_width_px != static_cast<uint32_t>(view.width_px) ||
+      m.view_height_px != static_cast<uint32_t>(view.height_px)) {
+    return Status::error(StatusCode::kCorrupt, "map file: views of %ux%u, expected %dx%d",
+                         m.view_width_px, m.view_height_px, view.width_px, view.height_px);
+  }
+  // The largest place holds most_features features.
+  const uint64_t least_bytes = kHeaderBytes + kChecksumBytes +
+                               uint64_t{m.places} * (kPlaceBytes + View::bytes(m.camera)) +
+                               (m.places > 0 ? uint64_t{m.most_features} * kFeatureBytes : 0) +
+                               uint64_t{m.edges} * kEdgeBytes;
+  if (least_bytes > size || m.vocabulary_words > kMostWords) {
+    return Status::error(StatusCode::kCorrupt, "map file: header counts damaged");
+  }
   *info = m;
   return Status::ok();
 }
@@ -212,12 +281,6 @@ Status load_map(const uint8_t* data, size_t size, const Params& params,
                          "configuration's (%dx%d, fx %.2f)",
                          m.camera.width_px, m.camera.height_px, m.camera.fx_px,
                          params.camera.width_px, params.camera.height_px, params.camera.fx_px);
-  }
-  const PinholeIntrinsics view = View::intrinsics(params.camera);
-  if (m.view_width_px != static_cast<uint32_t>(view.width_px) ||
-      m.view_height_px != static_cast<uint32_t>(view.height_px)) {
-    return Status::error(StatusCode::kCorrupt, "map file: views of %ux%u, expected %dx%d",
-                         m.view_width_px, m.view_height_px, view.width_px, view.height_px);
   }
   if (m.vocabulary_checksum != vocabulary.checksum() ||
       m.vocabulary_words != static_cast<uint32_t>(vocabulary.words())) {
@@ -246,45 +309,7 @@ Status load_map(const uint8_t* data, size_t size, const Params& params,
   }
 
   ByteReader r(data + kHeaderBytes, size - kHeaderBytes - kChecksumBytes);
-  const size_t view_pixels = static_cast<size_t>(view.width_px) * view.height_px;
-  std::lock_guard<std::mutex> lock(places->mutex());
-  for (uint32_t i = 0; i < m.places; ++i) {
-    PlaceRecord* p = places->begin_insert();
-    p->keyframe_id = r.get<uint32_t>();
-    p->timestamp_ns = r.get<int64_t>();
-    const bool ids_grow =
-        i == 0 || p->keyframe_id > places->in_order(places->size() - 1).keyframe_id;
-    if (!read_pose(&r, &p->T_w_k) || !ids_grow || p->keyframe_id >= m.next_keyframe_id) {
-      return corrupt("place", i);
-    }
-    const uint32_t features = r.get<uint32_t>();
-    if (features > m.most_features) return corrupt("place", i);
-    for (uint32_t k = 0; k < features; ++k) {
-      Feature f;
-      for (uint64_t& b : f.descriptor.bits) b = r.get<uint64_t>();
-      for (float* v : {&f.u_px, &f.v_px, &f.x_m, &f.y_m, &f.z_m}) *v = r.get<float>();
-      if (!std::isfinite(f.x_m) || !std::isfinite(f.y_m) || !std::isfinite(f.z_m)) {
-        return corrupt("place", i);
-      }
-      (void)p->features.push_back(f);
-    }
-    const uint32_t words = r.get<uint32_t>();
-    if (words > static_cast<uint32_t>(p->bow.capacity())) return corrupt("place", i);
-    for (uint32_t k = 0; k < words; ++k) {
-      BowEntry e;
-      e.word = r.get<uint32_t>();
-      e.weight = r.get<float>();
-      const bool sorted = k == 0 || e.word > p->bow[static_cast<int>(k) - 1].word;
-      if (e.word >= m.vocabulary_words || !sorted || !std::isfinite(e.weight)) {
-        return corrupt("place", i);
-      }
-      (void)p->bow.push_back(e);
-    }
-    r.bytes(p->view.gray.data(), view_pixels);
-    r.bytes(p->view.inverse_depth.data(), sizeof(uint16_t) * view_pixels);
-    if (!r.ok()) return corrupt("place", i);
-    places->commit();
-  }
+  RGBDTAM_RETURN_IF_ERROR(read_places(m, &r, places));
   for (uint32_t i = 0; i < m.edges; ++i) {
     const int from = places->order_of(r.get<uint32_t>());
     const int to = places->order_of(r.get<uint32_t>());
@@ -309,6 +334,17 @@ Status load_map(const uint8_t* data, size_t size, const Params& params,
     return Status::error(StatusCode::kCorrupt, "map file: %zu bytes after the last edge", r.left());
   }
   return Status::ok();
+}
+
+Status read_map_places(const uint8_t* data, size_t size, PlaceStore* places, MapFileInfo* info) {
+  RGBDTAM_RETURN_IF_ERROR(read_map_info(data, size, info));
+  if (info->places == 0) return Status::error(StatusCode::kInvalidArgument, "map file: no places");
+  // The store's index wants room for at least one feature and word.
+  places->allocate(static_cast<int>(info->places),
+                   static_cast<int>(std::max<uint32_t>(info->most_features, 1)),
+                   static_cast<int>(std::max<uint32_t>(info->vocabulary_words, 1)), info->camera);
+  ByteReader r(data + kHeaderBytes, size - kHeaderBytes - kChecksumBytes);
+  return read_places(*info, &r, places);
 }
 
 }  // namespace rgbdtam

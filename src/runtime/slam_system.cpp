@@ -81,13 +81,29 @@ Status SlamSystem::load_map(const uint8_t* data, size_t size, MapFileInfo* info)
   return Status::ok();
 }
 
-Status SlamSystem::write_map(MapFileInfo meta, ByteSink* out) const {
-  RGBDTAM_ASSERT(loop_on_ && finished_, "a map is written after finish(), with loop closure on");
+MapFileInfo SlamSystem::map_meta(MapFileInfo meta) const {
+  RGBDTAM_ASSERT(loop_on_, "a map file needs loop closure on");
   meta.camera = params_.camera;
   meta.vocabulary_checksum = vocabulary_->checksum();
   meta.vocabulary_words = static_cast<uint32_t>(vocabulary_->words());
+  return meta;
+}
+
+Status SlamSystem::write_map(MapFileInfo meta, ByteSink* out) const {
+  RGBDTAM_ASSERT(loop_on_ && finished_, "a map is written after finish(), with loop closure on");
+  meta = map_meta(meta);
   meta.next_keyframe_id = tracking_.next_keyframe_id();
   return rgbdtam::write_map(places_, loop_.edges(), meta, out);
+}
+
+Status SlamSystem::set_checkpoint(MapCheckpoint* checkpoint) {
+  if (!loop_on_ || !params_.loop.threaded || params_.map_mode != MapMode::kSlam) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "saving the map while running needs loop closure on its own thread "
+                         "(loop.enabled, loop.threaded) and map.mode = slam");
+  }
+  loop_.set_checkpoint(checkpoint);
+  return Status::ok();
 }
 
 Status SlamSystem::start(const ThreadPlacement& mapper, const ThreadPlacement& loop) {

@@ -7,6 +7,8 @@
 #include <initializer_list>
 #include <memory>
 #include <new>
+#include <string>
+#include <vector>
 
 #include "clip_camera.hpp"
 #include "config_files.hpp"
@@ -122,38 +124,80 @@ TEST(Allocations, NoneWhileRecoveringFromAKidnappedFrame) {
       c.frames, c.retried, c.recovered_by_guesses, c.recovered_by_last_frame, c.lost, calls);
 }
 
-TEST(Allocations, NoneInTheFirmwareRuntimeAcrossItsThreads) {
-  // rgbdtam run on the host-emulation board: paced replay, tracker, mapper thread, link thread
-  // sending MAVLink over UDP to this test, fake GPIO.
-  UdpLink receiver;
-  ASSERT_TRUE(receiver.open(nullptr, 0, 0).is_ok());
+// rgbdtam run on the host-emulation board: paced replay, tracker, mapper thread, link thread
+// sending MAVLink over UDP to this test, fake GPIO. Counts from the first frame to the last;
+// with count_finish, through finish() too.
+long count_firmware_allocations(std::vector<std::string> overrides, RunJob* job,
+                                bool count_finish = true, const char* param_override = nullptr) {
+  static UdpLink receiver;
+  if (receiver.local_port() == 0) {
+    EXPECT_TRUE(receiver.open(nullptr, 0, 0).is_ok());
+  }
   const std::string board = testing::source_path("board/host-emulation");
-  const std::string endpoint = "link.udp_remote=127.0.0.1:" + std::to_string(receiver.local_port());
+  overrides.push_back("link.udp_remote=127.0.0.1:" + std::to_string(receiver.local_port()));
   RunOptions options;
   options.board_dir = board.c_str();
-  options.board_overrides[options.board_override_count++] = endpoint.c_str();
+  for (const std::string& o : overrides) {
+    options.board_overrides[options.board_override_count++] = o.c_str();
+  }
+  if (param_override != nullptr) {
+    options.param_overrides[options.param_override_count++] = param_override;
+  }
   options.progress = false;
-  RunJob job;
-  ASSERT_TRUE(job.init(options).is_ok());
-  ASSERT_TRUE(job.start().is_ok());  // threads exist: init is complete
+  const Status s = job->init(options);
+  EXPECT_TRUE(s.is_ok()) << s.message();
+  if (!s.is_ok() || !job->start().is_ok()) return -1;  // threads exist: init is complete
   g_calls = 0;
   g_bytes = 0;
   g_armed = true;
-  while (job.step()) {
+  while (job->step()) {
   }
-  job.finish();
+  g_armed = count_finish;
+  job->finish();
   g_armed = false;
+  return g_calls.load();
+}
+
+TEST(Allocations, NoneInTheFirmwareRuntimeAcrossItsThreads) {
+  RunJob job;
+  const long calls = count_firmware_allocations({}, &job);
   const FirmwareCounters& c = job.runtime().counters();
   EXPECT_EQ(c.frames + job.sensor_dropped(), 50u);
   EXPECT_GT(job.runtime().slam().mapper().counters().keyframes_mapped, 0u);
   EXPECT_EQ(job.runtime().link().counters().odometry_sent, c.frames);
-  EXPECT_EQ(g_calls.load(), 0) << g_bytes.load() << " bytes allocated after init";
+  EXPECT_EQ(calls, 0) << g_bytes.load() << " bytes allocated after init";
   std::printf(
       "firmware runtime: %u frames, %u keyframes mapped, %llu ODOMETRY sent, %ld "
       "allocations after init\n",
       c.frames, job.runtime().slam().mapper().counters().keyframes_mapped,
-      static_cast<unsigned long long>(job.runtime().link().counters().odometry_sent),
-      g_calls.load());
+      static_cast<unsigned long long>(job.runtime().link().counters().odometry_sent), calls);
+}
+
+TEST(Allocations, NoneInTheFirmwareRuntimeInAMapSavedWhileRunningOrLocalisedIn) {
+  // A first run makes the board's map; then, counted, a run that loads and extends it and saves
+  // it from the loop thread while running, and a run that localises in it. The save at the end
+  // (after the threads have stopped) is not counted.
+  const std::string map = "map.file=" + testing::make_temp_dir("alloc_map") + "/board.map";
+  {
+    RunJob first;
+    EXPECT_EQ(count_firmware_allocations({map}, &first, false), 0);
+    ASSERT_TRUE(first.map_saved().is_ok()) << first.map_saved().message();
+  }
+  RunJob slam;
+  const long slam_calls = count_firmware_allocations({map, "map.save_period_s=1"}, &slam, false);
+  EXPECT_GT(slam.loaded_map().places, 0u);
+  EXPECT_GE(slam.map_checkpoint().saves(), 1u) << "a save while running is part of the count";
+  EXPECT_EQ(slam_calls, 0) << g_bytes.load() << " bytes allocated after init";
+  RunJob localise;
+  const long localise_calls =
+      count_firmware_allocations({map}, &localise, false, "map.mode=localise");
+  EXPECT_GT(localise.runtime().counters().tracked, 0u) << "found in the map";
+  EXPECT_EQ(localise_calls, 0) << g_bytes.load() << " bytes allocated after init";
+  std::printf(
+      "map loaded (%u places): slam with %u saves while running, %ld allocations; "
+      "localise, %u frames tracked, %ld allocations\n",
+      slam.loaded_map().places, slam.map_checkpoint().saves(), slam_calls,
+      localise.runtime().counters().tracked, localise_calls);
 }
 
 TEST(Allocations, NoneWhileRecordingAfterInit) {

@@ -175,6 +175,34 @@ TEST(Cli, TheSummarySaysWhatThePlaceStoreForgot) {
   EXPECT_NE(o.out.find("coverage: 100.0 %"), std::string::npos) << o.out;
 }
 
+TEST(Cli, AMapFileIsDescribedAndExportedAsAGridForPlanners) {
+  const std::string dir = testing::make_temp_dir("cli_map");
+  const Outcome replay = rgbdtam("replay " + clip() + " --config " + config() +
+                                 " --quiet --map-out " + dir + "/clip.map");
+  ASSERT_EQ(replay.exit_code, 0) << replay.err;
+  EXPECT_NE(replay.out.find("places saved in"), std::string::npos) << replay.out;
+  const Outcome info = rgbdtam("map info " + dir + "/clip.map");
+  EXPECT_EQ(info.exit_code, 0) << info.err;
+  EXPECT_NE(info.out.find("camera: 640x480"), std::string::npos) << info.out;
+  EXPECT_NE(info.out.find("by rgbdtam "), std::string::npos) << info.out;
+
+  const Outcome grid = rgbdtam("map export " + dir + "/clip.map --grid " + dir + "/clip --png");
+  EXPECT_EQ(grid.exit_code, 0) << grid.err;
+  EXPECT_NE(grid.out.find("level: assumed"), std::string::npos) << grid.out;
+  EXPECT_EQ(read_all(dir + "/clip.pgm").substr(0, 3), "P5\n");
+  EXPECT_NE(read_all(dir + "/clip.yaml").find("image: clip.pgm\n"), std::string::npos);
+  EXPECT_EQ(read_all(dir + "/clip.png").substr(1, 3), "PNG");
+
+  const Outcome no_grid = rgbdtam("map export " + dir + "/clip.map");
+  EXPECT_EQ(no_grid.exit_code, 1);
+  EXPECT_NE(no_grid.err.find("--grid <prefix> is required"), std::string::npos) << no_grid.err;
+  const Outcome not_a_map = rgbdtam("map export " + config() + " --grid " + dir + "/x");
+  EXPECT_EQ(not_a_map.exit_code, 1);
+  EXPECT_NE(not_a_map.err.find("not an rgbdtam map file"), std::string::npos) << not_a_map.err;
+  EXPECT_FALSE(exists(dir + "/x.pgm"));
+  EXPECT_EQ(rgbdtam("map frobnicate").exit_code, 2);
+}
+
 // Issue 23, defect 3: validation knows the smallest image every component takes.
 TEST(Cli, ACameraTooSmallIsRefusedWithItsMinimum) {
   const Outcome o = rgbdtam("replay " + clip() + " --config " + config() + " --set camera.width=8");

@@ -197,8 +197,12 @@ TEST(Firmware, ABoardsMapFileIsSavedAtTheEndAndTheNextRunIsFoundInIt) {
   const std::string map = testing::make_temp_dir("firmware_map") + "/board.map";
   testing::Monitor first_monitor;
   auto first = std::make_unique<RunJob>();
-  testing::run_board(&first_monitor, first.get(), {"map.file=" + map});
+  // The clip lasts 1.7 s: one save while running, by the loop thread, then the one at the end.
+  testing::run_board(&first_monitor, first.get(), {"map.file=" + map, "map.save_period_s=1"});
   ASSERT_TRUE(first->map_saved().is_ok()) << first->map_saved().message();
+  EXPECT_EQ(first->map_checkpoint().saves(), 1u);
+  EXPECT_EQ(first->map_checkpoint().failures(), 0u)
+      << first->map_checkpoint().last_failure().message();
   EXPECT_EQ(first->loaded_map().places, 0u) << "none yet: made at the end";
   const int places = first->runtime().slam().places().size();
   EXPECT_GT(places, 0);

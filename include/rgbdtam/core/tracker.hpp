@@ -213,7 +213,7 @@ class Tracker {
   void add_normal_equations_of(const TrackPoints& ph, const TrackPoints& geo, LevelCost* c);
 
   TrackerOptions opt_;
-  const TrackPoints no_points_;  // stands in for the geometric set without depth
+  const TrackPoints no_points_{};  // stands in for the geometric set without depth
   // Per-point scratch, indexed like the keyframe's point sets, padded like them.
   std::unique_ptr<float[]> proj_u_, proj_v_, proj_inverse_z_;
   std::unique_ptr<float[]> ph_sample_, ph_residual_, geo_residual_;

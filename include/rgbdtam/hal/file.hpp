@@ -11,6 +11,11 @@
 
 namespace rgbdtam {
 
+// After a rename into `path`: syncs its folder so the new name is on the disk. Best effort: a
+// folder that cannot be opened or synced (some network file systems) leaves the rename to the
+// kernel's own schedule.
+void sync_folder_of(const char* path);
+
 // Reads `path` into buf; fails with kOutOfRange when the file is larger than capacity.
 Status read_file(const char* path, uint8_t* buf, size_t capacity, size_t* size);
 // Init-time helper: reads a text file into a new NUL-terminated buffer of at most max_bytes.

@@ -27,6 +27,7 @@ struct Board {
   char sensor_depth[kTextBytes] = "registered";  // freenect: registered (mm) or raw (11-bit)
   char sensor_usb_id[kTextBytes] = "";           // vvvv:pppp that must be attached; "" = none
   char map_file[kTextBytes] = "";        // a saved map to start in and to save to; "" = none
+  int map_save_period_s = 60;            // saves while running (0: only at the end)
   char sysfs_root[kTextBytes] = "/sys";  // where sysfs is mounted
   char devfs_root[kTextBytes] = "/dev";  // where devtmpfs is (usbfs nodes for a reset)
   double sensor_fps = 30.0;

@@ -40,6 +40,8 @@ class FirmwareRuntime {
   // After init, before start: a saved map to start in (SlamSystem::load_map); the first pose
   // found in it is announced on the link.
   Status load_map(const uint8_t* data, size_t size, MapFileInfo* info);
+  // After init, before start: saves while running (SlamSystem::set_checkpoint).
+  Status set_map_checkpoint(MapCheckpoint* checkpoint) { return slam_.set_checkpoint(checkpoint); }
   // Places the calling thread as the tracker and starts the mapper and link threads, as the
   // board says. on_frame() must then be called from this same thread.
   Status start();

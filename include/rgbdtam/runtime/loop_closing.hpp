@@ -74,6 +74,8 @@ struct CandidateBudget {
   static constexpr int kTotal = kCovisible + kGeometric + kAppearance;
 };
 
+class MapCheckpoint;
+
 class LoopModule {
  public:
   // Edges the graph keeps per place: its measurement, and on average a few verified alignments.
@@ -87,9 +89,11 @@ class LoopModule {
   Status init(const Params& params, const Vocabulary* vocabulary, PlaceStore* store,
               CorrectionQueue* corrections, ClockFn clock);
   void step(const LoopKeyframe& message);
-  void tick() {}
+  void tick();  // a periodic save, when one is due
   void finish() {}
   void set_observer(LoopObserver* observer) { observer_ = observer; }
+  // Init time: saves while running (threaded loop module only: a save takes a while).
+  void set_checkpoint(MapCheckpoint* checkpoint) { checkpoint_ = checkpoint; }
   const LoopCounters& counters() const { return counters_; }
   const LatencyStats& describe_time() const { return describe_time_; }
   const LatencyStats& search_time() const { return search_time_; }  // candidates and alignment
@@ -120,6 +124,7 @@ class LoopModule {
   CorrectionQueue* corrections_ = nullptr;
   ClockFn clock_ = nullptr;
   LoopObserver* observer_ = nullptr;
+  MapCheckpoint* checkpoint_ = nullptr;
   PlaceRecognizer recognizer_;
   VerificationLimits limits_;
   ViewAligner aligner_;

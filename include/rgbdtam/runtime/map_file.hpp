@@ -52,7 +52,8 @@ struct MapFileInfo {
 };
 
 // Writes the places the store remembers and the edges between them. meta gives the camera,
-// vocabulary, next keyframe id, time and writer; the counts and extent are filled in here.
+// vocabulary, time, writer and the next keyframe id (raised past the places' own here); the
+// counts and extent are filled in here.
 Status write_map(const PlaceStore& places, const FixedVector<LoopModule::Edge>& edges,
                  MapFileInfo meta, ByteSink* out);
 
@@ -67,5 +68,9 @@ Status read_map_info(const uint8_t* data, size_t size, MapFileInfo* info);
 Status load_map(const uint8_t* data, size_t size, const Params& params,
                 const Vocabulary& vocabulary, PlaceStore* places, LoopModule* loop,
                 MapFileInfo* info);
+
+// For tools (it allocates): the header and places of a map file, into `places`, sized here from
+// the header. The edges are not read.
+Status read_map_places(const uint8_t* data, size_t size, PlaceStore* places, MapFileInfo* info);
 
 }  // namespace rgbdtam

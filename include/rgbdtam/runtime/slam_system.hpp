@@ -3,6 +3,7 @@
 // mapper, stepped synchronously after each frame (deterministic replay) or on its own thread.
 // init() allocates everything, start() starts the mapper thread; process() never allocates.
 
+#include "rgbdtam/runtime/map_checkpoint.hpp"
 #include "rgbdtam/runtime/map_file.hpp"
 #include "rgbdtam/runtime/mapping.hpp"
 #include "rgbdtam/runtime/thread_placement.hpp"
@@ -33,6 +34,12 @@ class SlamSystem {
   Status load_map(const uint8_t* data, size_t size, MapFileInfo* info);
   // After finish(): the places and graph as a map file. meta: time and writer.
   Status write_map(MapFileInfo meta, ByteSink* out) const;
+  // meta with what a map file of this system says of the camera and vocabulary (loop closure
+  // on).
+  MapFileInfo map_meta(MapFileInfo meta) const;
+  // After init, before start: saves while running, on the loop module's thread (loop.threaded,
+  // map.mode slam).
+  Status set_checkpoint(MapCheckpoint* checkpoint);
   // Starts the mapper's and loop module's threads when map.threaded, loop.threaded (after
   // init, as every thread is).
   Status start(const ThreadPlacement& mapper = ThreadPlacement(),
