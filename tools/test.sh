@@ -50,6 +50,8 @@ check host-release
 file build/bin/rgbdtam | grep -q "statically linked" || { echo "host rgbdtam is not static" >&2; exit 1; }
 echo "=== node-mavlink: the link as an independent decoder sees it ($(date +%T))"
 node tools/mavlink-check/check.mjs build/bin/rgbdtam board/host-emulation
+build/bin/rgbdtam-stress wall "$logs/wall" --distance-m 2 --yaw-deg 20 --frames 30 >/dev/null
+node tools/mavlink-check/obstacle-check.mjs build/bin/rgbdtam board/host-emulation "$logs/wall" 2 20
 echo "=== the monitor's live page in headless Chromium ($(date +%T))"
 node tools/mavlink-check/page-check.mjs build/bin board/host-emulation build/monitor-page
 # With the shared-library backends: Debian's libfreenect against its fakenect, OpenNI2's Dummy

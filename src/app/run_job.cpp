@@ -379,12 +379,16 @@ void RunJob::print_summary() const {
               l.time_per_message().percentile_ms(0.5), l.time_per_message().percentile_ms(0.95),
               l.time_per_message().max_ms());
   std::printf(
-      "link: ODOMETRY %llu sent, %llu rate-limited, %llu refused; HEARTBEAT %llu, "
+      "link: ODOMETRY %llu sent, %llu rate-limited, %llu refused; OBSTACLE_DISTANCE %llu "
+      "sent, %llu rate-limited, %llu refused; HEARTBEAT %llu, "
       "STATUSTEXT %llu; queue drops %llu; transport tx %llu frames %llu bytes, drops "
       "%llu, errors %llu\n",
       static_cast<unsigned long long>(lc.odometry_sent),
       static_cast<unsigned long long>(lc.odometry_rate_limited),
       static_cast<unsigned long long>(lc.odometry_refused),
+      static_cast<unsigned long long>(lc.obstacles_sent),
+      static_cast<unsigned long long>(lc.obstacles_rate_limited),
+      static_cast<unsigned long long>(lc.obstacles_refused),
       static_cast<unsigned long long>(lc.heartbeats_sent),
       static_cast<unsigned long long>(lc.status_texts_sent),
       static_cast<unsigned long long>(l.queue_drops()),

@@ -86,6 +86,17 @@ const KeySpec kSpecs[] = {
      RGBDTAM_FIELD(link_component_id), false},
     {"link.T_b_c", ValueType::kCustom, 0, 0, "", "body from camera: qw qx qy qz tx ty tz (m)",
      RGBDTAM_FIELD(T_b_c), false, parse_pose, print_pose},
+    {"obstacle.rate_hz", ValueType::kReal, 0, 30, "Hz",
+     "OBSTACLE_DISTANCE from the depth image this often (0: never)",
+     RGBDTAM_FIELD(obstacle_rate_hz), false},
+    {"obstacle.lowest_m", ValueType::kReal, -10, 10, "m",
+     "obstacles: lowest point above the body (link.T_b_c), up positive",
+     RGBDTAM_FIELD(obstacle_lowest_m), false},
+    {"obstacle.highest_m", ValueType::kReal, -10, 10, "m",
+     "obstacles: highest point above the body", RGBDTAM_FIELD(obstacle_highest_m), false},
+    {"obstacle.fov_deg", ValueType::kReal, 0, 180, "deg",
+     "span of the 72 sectors, centred on the camera's bearing (0: its horizontal field of view)",
+     RGBDTAM_FIELD(obstacle_fov_deg), false},
     RGBDTAM_TEXT("gpio.chip", "GPIO chip device (empty: no GPIO)", gpio_chip, false),
     {"gpio.led_line", ValueType::kInt, -1, 1023, "", "status LED line (-1: none)",
      RGBDTAM_FIELD(gpio_led_line), false},
@@ -221,6 +232,12 @@ Status validate_board(const Board& b) {
     return Status::error(StatusCode::kInvalidArgument,
                          "board '%s': sensor.depth '%s' is not registered or raw", b.name,
                          b.sensor_depth);
+  }
+  if (b.obstacle_lowest_m >= b.obstacle_highest_m) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "board '%s': obstacle.lowest_m (%.2f) must be below obstacle.highest_m "
+                         "(%.2f)",
+                         b.name, b.obstacle_lowest_m, b.obstacle_highest_m);
   }
   if (!one_of(b.link_kind, kLinks, 2)) {
     return Status::error(StatusCode::kInvalidArgument,

@@ -23,7 +23,29 @@ Status FirmwareRuntime::init(const Params& params, const Board& board, ByteLink*
   link_config.T_b_c = board.T_b_c;
   link_.init(link_config, link, kLinkQueueSlots, clock);
   led_.init(gpio, board.gpio_led_line);
+  if (board.obstacle_rate_hz > 0) {
+    ObstacleOptions options;
+    options.lowest_m = board.obstacle_lowest_m;
+    options.highest_m = board.obstacle_highest_m;
+    options.fov_deg = board.obstacle_fov_deg;
+    obstacles_.init(params_.camera, board.T_b_c, params_.sensor.depth_factor,
+                    params_.sensor.depth_range, options);
+    obstacle_period_ns_ = static_cast<int64_t>(1e9 / board.obstacle_rate_hz);
+  }
   return Status::ok();
+}
+
+void FirmwareRuntime::report_obstacles(const SensorFrame& frame) {
+  const int64_t stamp_ns =
+      frame.depth_timestamp_ns != 0 ? frame.depth_timestamp_ns : frame.timestamp_ns;
+  // Half a frame of slack, so that 10 Hz at 30 Hz is every third frame despite stamp jitter.
+  const bool due = stamp_ns - last_obstacles_ns_ + period_ns_ / 2 >= obstacle_period_ns_ ||
+                   stamp_ns < last_obstacles_ns_;  // a recording started again
+  if (obstacle_period_ns_ == 0 || frame.depth == nullptr || !due) return;
+  last_obstacles_ns_ = stamp_ns;
+  ObstacleSectors sectors;
+  obstacles_.measure(frame.depth, &sectors);
+  if (link_.post_obstacles(sectors, stamp_ns)) ++counters_.obstacle_reports;
 }
 
 Status FirmwareRuntime::start() {
@@ -86,6 +108,7 @@ PoseEstimate FirmwareRuntime::on_frame(const SensorFrame& frame, int64_t arrival
     post_event(mavlink::kMavSeverityInfo, text);
   }
   (void)link_.post_pose(pose, arrival_ns);
+  report_obstacles(frame);  // needs no pose: sent whether tracking is valid or not
   const int64_t now = clock_();
   LedState state = valid                                                 ? LedState::kTracking
                    : (pose.flags & (kNotInitialised | kLocalising)) != 0 ? LedState::kInitialising

@@ -46,17 +46,31 @@ bool LinkTask::post_status(uint8_t severity, const char* text) {
   return post(m);
 }
 
+bool LinkTask::post_obstacles(const ObstacleSectors& sectors, int64_t timestamp_ns) {
+  LinkMessage m;
+  m.kind = LinkMessage::Kind::kObstacles;
+  m.obstacles = sectors;
+  m.obstacles_timestamp_ns = timestamp_ns;
+  return post(m);
+}
+
 void LinkTask::stop() {
   if (worker_.running()) worker_.stop();
 }
 
 void LinkTask::Sender::step(const LinkMessage& m) {
   const int64_t t0 = task->clock_();
-  if (m.kind == LinkMessage::Kind::kPose) {
-    task->link_.set_time_base(m.pose.timestamp_ns, m.arrival_ns);
-    task->link_.on_pose(m.pose, t0);
-  } else {
-    task->link_.on_status(m.severity, m.text, t0);
+  switch (m.kind) {
+    case LinkMessage::Kind::kPose:
+      task->link_.set_time_base(m.pose.timestamp_ns, m.arrival_ns);
+      task->link_.on_pose(m.pose, t0);
+      break;
+    case LinkMessage::Kind::kStatus:
+      task->link_.on_status(m.severity, m.text, t0);
+      break;
+    case LinkMessage::Kind::kObstacles:
+      task->link_.on_obstacles(m.obstacles, m.obstacles_timestamp_ns, t0);
+      break;
   }
   task->per_message_.add(task->clock_() - t0);
 }

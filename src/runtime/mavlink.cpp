@@ -66,8 +66,8 @@ uint16_t crc_accumulate(const uint8_t* bytes, size_t n, uint16_t crc) {
 }
 
 const MessageSpec* find_spec(uint32_t id) {
-  static constexpr const MessageSpec* kKnown[] = {&kHeartbeat, &kStatusText, &kOdometry,
-                                                  &kTimesync};
+  static constexpr const MessageSpec* kKnown[] = {&kHeartbeat, &kStatusText, &kOdometry, &kTimesync,
+                                                  &kObstacleDistance};
   for (const MessageSpec* s : kKnown) {
     if (s->id == id) return s;
   }
@@ -124,6 +124,19 @@ void odometry_fields(M& m, F&& f) {
   f(m.quality);
 }
 
+template <typename M, typename F>
+void obstacle_distance_fields(M& m, F&& f) {
+  f(m.time_usec);
+  f(m.distances);
+  f(m.min_distance);
+  f(m.max_distance);
+  f(m.sensor_type);
+  f(m.increment);
+  f(m.increment_f);
+  f(m.angle_offset);
+  f(m.frame);
+}
+
 int pack(const Heartbeat& m, uint8_t* payload) {
   Writer w(payload);
   heartbeat_fields(m, [&](const auto& v) { w.put(v); });
@@ -158,6 +171,12 @@ int pack(const Odometry& m, uint8_t* payload) {
   return w.size();
 }
 
+int pack(const ObstacleDistance& m, uint8_t* payload) {
+  Writer w(payload);
+  obstacle_distance_fields(m, [&](const auto& v) { w.put(v); });
+  return w.size();
+}
+
 void unpack(const uint8_t* payload, int length, Heartbeat* m) {
   uint8_t scratch[kMaxPayloadBytes];
   Reader r(padded(payload, length, kHeartbeat.payload_bytes, scratch));
@@ -180,6 +199,12 @@ void unpack(const uint8_t* payload, int length, Odometry* m) {
   uint8_t scratch[kMaxPayloadBytes];
   Reader r(padded(payload, length, kOdometry.payload_bytes, scratch));
   odometry_fields(*m, [&](auto& v) { r.get(&v); });
+}
+
+void unpack(const uint8_t* payload, int length, ObstacleDistance* m) {
+  uint8_t scratch[kMaxPayloadBytes];
+  Reader r(padded(payload, length, kObstacleDistance.payload_bytes, scratch));
+  obstacle_distance_fields(*m, [&](auto& v) { r.get(&v); });
 }
 
 int Encoder::frame(const MessageSpec& spec, const uint8_t* payload, int length, uint8_t* out) {

@@ -91,7 +91,7 @@ mavlink::Odometry PoseLink::odometry_of(const PoseEstimate& pose) {
   return o;
 }
 
-bool PoseLink::spend(int n, int64_t now_ns, bool must) {
+bool PoseLink::spend(int n, int64_t now_ns, bool must, int keep) {
   const double rate = link_->line_rate_bytes_per_s();
   if (rate <= 0) return true;
   const double cap = std::max(rate * config_.burst_ns * 1e-9, 2.0 * mavlink::kMaxFrameBytes);
@@ -100,21 +100,45 @@ bool PoseLink::spend(int n, int64_t now_ns, bool must) {
     tokens_ += rate * (now_ns - tokens_at_ns_) * 1e-9;
   tokens_ = std::min(tokens_, cap);
   tokens_at_ns_ = now_ns;
-  if (tokens_ < n && !must) return false;
+  if (tokens_ < n + keep && !must) return false;
   tokens_ -= n;
   return true;
 }
 
-void PoseLink::on_pose(const PoseEstimate& pose, int64_t now_ns) {
+template <typename Message>
+void PoseLink::send_if_room(const Message& m, int64_t now_ns, uint64_t* sent,
+                            uint64_t* rate_limited, uint64_t* refused, int keep) {
   uint8_t frame[mavlink::kMaxFrameBytes];
-  const int n = encoder_.encode(odometry_of(pose), frame);
-  if (!spend(n, now_ns, false)) {
-    ++counters_.odometry_rate_limited;
+  const int n = encoder_.encode(m, frame);
+  if (!spend(n, now_ns, false, keep)) {
+    ++*rate_limited;
   } else if (link_->send(frame, static_cast<size_t>(n))) {
-    ++counters_.odometry_sent;
+    ++*sent;
   } else {
-    ++counters_.odometry_refused;
+    ++*refused;
   }
+}
+
+void PoseLink::on_pose(const PoseEstimate& pose, int64_t now_ns) {
+  send_if_room(odometry_of(pose), now_ns, &counters_.odometry_sent,
+               &counters_.odometry_rate_limited, &counters_.odometry_refused);
+}
+
+void PoseLink::on_obstacles(const ObstacleSectors& sectors, int64_t timestamp_ns, int64_t now_ns) {
+  mavlink::ObstacleDistance m;
+  m.time_usec = static_cast<uint64_t>(std::max<int64_t>(0, timestamp_ns / 1000));
+  std::copy(sectors.distance_cm, sectors.distance_cm + ObstacleSectors::kCount, m.distances);
+  m.min_distance = sectors.min_cm;
+  m.max_distance = sectors.max_cm;
+  // Receivers that read only the whole-degree field get the nearest non-zero width.
+  m.increment = static_cast<uint8_t>(std::max(1.0f, std::round(sectors.increment_deg)));
+  m.increment_f = sectors.increment_deg;
+  m.angle_offset = sectors.angle_offset_deg;
+  // On a slow line the next ODOMETRY comes first: obstacles leave room for one.
+  constexpr int kOdometryFrameBytes =
+      mavlink::kHeaderBytes + mavlink::kOdometry.payload_bytes + mavlink::kChecksumBytes;
+  send_if_room(m, now_ns, &counters_.obstacles_sent, &counters_.obstacles_rate_limited,
+               &counters_.obstacles_refused, kOdometryFrameBytes);
 }
 
 template <typename Message>

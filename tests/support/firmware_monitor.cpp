@@ -20,6 +20,9 @@ void Monitor::drain(const SE3& T_b_c) {
         } else {
           poses.push_back({o.time_usec * 1e-6, camera_pose_of(o, T_b_c)});
         }
+      } else if (f.message_id == mavlink::kObstacleDistance.id) {
+        obstacles.emplace_back();
+        mavlink::unpack(f.payload, f.length, &obstacles.back());
       } else if (f.message_id == mavlink::kHeartbeat.id) {
         ++heartbeats;
       } else if (f.message_id == mavlink::kStatusText.id) {

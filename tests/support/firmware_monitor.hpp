@@ -19,6 +19,7 @@ struct Monitor {
   std::vector<StampedPose> poses;
   int odometry = 0, lost = 0, heartbeats = 0;
   std::vector<std::string> texts;
+  std::vector<mavlink::ObstacleDistance> obstacles;
   mavlink::StatusTextJoiner joiner;
   // Decodes what has arrived; poses in the camera frame (T_b_c: the board's mounting).
   void drain(const SE3& T_b_c);

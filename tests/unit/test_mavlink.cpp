@@ -108,7 +108,8 @@ TEST(Mavlink, X25CheckValue) {
 TEST(Mavlink, CrcExtraAndLengthsMatchTheXmlDefinitions) {
   const std::string xml = read_file(testing::source_path("tests/data/mavlink/messages.xml"));
   ASSERT_FALSE(xml.empty());
-  for (const MessageSpec* s : {&kHeartbeat, &kStatusText, &kOdometry, &kTimesync}) {
+  for (const MessageSpec* s :
+       {&kHeartbeat, &kStatusText, &kOdometry, &kTimesync, &kObstacleDistance}) {
     expect_spec_matches(xml, *s);
   }
 }
@@ -122,6 +123,37 @@ TEST(Mavlink, CrcExtraMatchesTheUpstreamFilesWhereThisMachineHasThem) {
   expect_spec_matches(common, kStatusText);
   expect_spec_matches(common, kOdometry);
   expect_spec_matches(common, kTimesync);
+  expect_spec_matches(common, kObstacleDistance);
+}
+
+TEST(Mavlink, ObstacleDistanceRoundTripsInWireOrder) {
+  ObstacleDistance sent;
+  sent.time_usec = 1305031098382263ull;
+  for (int i = 0; i < 72; ++i) sent.distances[i] = static_cast<uint16_t>(100 + i);
+  sent.distances[71] = UINT16_MAX;
+  sent.min_distance = 30;
+  sent.max_distance = 500;
+  sent.increment = 1;
+  sent.increment_f = 0.8716f;
+  sent.angle_offset = -30.94f;
+  uint8_t payload[kMaxPayloadBytes];
+  ASSERT_EQ(pack(sent, payload), kObstacleDistance.payload_bytes);
+  // common.xml's wire order: time_usec, distances, min, max, sensor_type, increment, then the
+  // extensions increment_f, angle_offset, frame.
+  uint16_t first, min_cm;
+  std::memcpy(&first, payload + 8, 2);
+  std::memcpy(&min_cm, payload + 152, 2);
+  EXPECT_EQ(first, 100);
+  EXPECT_EQ(min_cm, 30);
+  EXPECT_EQ(payload[156], kMavDistanceSensorInfrared);
+  EXPECT_EQ(payload[166], kMavFrameBodyFrd);
+  ObstacleDistance got;
+  unpack(payload, kObstacleDistance.payload_bytes, &got);
+  EXPECT_EQ(got.time_usec, sent.time_usec);
+  EXPECT_EQ(got.distances[71], UINT16_MAX);
+  EXPECT_EQ(got.max_distance, 500);
+  EXPECT_FLOAT_EQ(got.increment_f, sent.increment_f);
+  EXPECT_FLOAT_EQ(got.angle_offset, sent.angle_offset);
 }
 
 Odometry sample_odometry(uint64_t t_us) {

@@ -66,6 +66,7 @@ const byId = (id) => packets.filter((p) => p.header.msgid === id);
 const odometry = byId(common.Odometry.MSG_ID).map((p) => decode(p, common.Odometry));
 const heartbeats = byId(minimal.Heartbeat.MSG_ID).map((p) => ({ t: p.timestamp, hb: decode(p, minimal.Heartbeat) }));
 const answers = byId(common.TimeSync.MSG_ID).map((p) => decode(p, common.TimeSync));
+const obstacles = byId(common.ObstacleDistance.MSG_ID).map((p) => decode(p, common.ObstacleDistance));
 
 check(splitter.invalidPackages === 0, `${splitter.invalidPackages} frames failed their CRC`);
 check(splitter.unknownPackagesCount === 0, `${splitter.unknownPackagesCount} frames of unknown messages`);
@@ -99,11 +100,34 @@ const answer = answers.find((a) => a.tc1 !== 0n && a.ts1 === ourTs1);
 check(answer !== undefined, 'no answer to our TIMESYNC request');
 if (answer) check(answer.targetSystem === 1 && answer.targetComponent === 1, 'TIMESYNC answer targets');
 check(/autopilot: system 1 component 1, MAV_AUTOPILOT 12 \(PX4\)/.test(stdout), 'the run did not report the autopilot');
+// OBSTACLE_DISTANCE at the board's 10 Hz (every third frame of the clip), in the body frame,
+// whether or not tracking is valid; each sector a distance within the range, "none" (max + 1)
+// or "unknown" (UINT16_MAX).
+check(Math.abs(obstacles.length - frames / 3) <= 1, `${obstacles.length} OBSTACLE_DISTANCE for ${frames} frames`);
+let known = 0;
+for (const o of obstacles) {
+  check(o.distances.length === 72, `${o.distances.length} sectors`);
+  check(o.frame === common.MavFrame.BODY_FRD, `OBSTACLE_DISTANCE frame ${o.frame}`);
+  // The clip's camera looks forward (the board's link.T_b_c): 72 sectors over its 63.5 degrees
+  // (fx 517.3 px over 640), centred on forward, sector 0's centre as the offset.
+  const span = o.incrementF * 72;
+  check(Math.abs(span - 63.48) < 0.05, `increment_f ${o.incrementF}: a span of ${span} degrees`);
+  check(Math.abs(o.angleOffset - (-span / 2 + o.incrementF / 2)) < 0.01, `angle_offset ${o.angleOffset}`);
+  check(o.minDistance === 30 && o.maxDistance > o.minDistance, `range ${o.minDistance}-${o.maxDistance} cm`);
+  for (const d of o.distances) {
+    check(d === 65535 || d === o.maxDistance + 1 || (d >= o.minDistance && d <= o.maxDistance), `sector distance ${d}`);
+    if (d !== 65535) known += 1;
+  }
+}
+const obstacleStamps = obstacles.map((o) => Number(o.timeUsec));
+check(obstacleStamps.every((t, i) => i === 0 || t > obstacleStamps[i - 1]), 'OBSTACLE_DISTANCE time_usec not increasing');
+check(known > obstacles.length * 72 / 2, `only ${known} of ${obstacles.length * 72} sectors known`);
 
 console.log(`node-mavlink ${splitter.validPackages} frames, all CRC-valid: ${odometry.length} ODOMETRY ` +
   `(${valid.length} valid) for ${frames} frames, ${heartbeats.length} HEARTBEAT, ` +
   `${answers.length} TIMESYNC (our request answered: ${answer !== undefined}), ` +
-  `${unknown} pose(s) with an unknown covariance`);
+  `${unknown} pose(s) with an unknown covariance, ${obstacles.length} OBSTACLE_DISTANCE ` +
+  `(${known} of ${obstacles.length * 72} sectors known)`);
 if (failures.length > 0) {
   console.error(`mavlink-check FAILED:\n  ${[...new Set(failures)].join('\n  ')}`);
   process.exit(1);

@@ -21,6 +21,7 @@ int usage() {
                "  rgbdtam-stress there-and-back <in> <out> --config <file>\n"
                "  rgbdtam-stress pan <out> --peak-deg-s <deg/s> [--frames <n>] [--fps <hz>]\n"
                "  rgbdtam-stress degenerate <out> --scene corridor|room [--frames <n>]\n"
+               "  rgbdtam-stress wall <out> --distance-m <m> --yaw-deg <deg> [--frames <n>]\n"
                "  rgbdtam-stress concat <first> <second> <out> [--gap-s <s>]\n"
                "  rgbdtam-stress wander <in> <out> --config <file> [--frames <n>] [--seed <n>]\n");
   return 2;
@@ -34,7 +35,7 @@ int main(int argc, char** argv) {
   const char* config = nullptr;
   std::string kind, scene;
   unsigned seed = 1;
-  double exposure_ms = 0, peak = 0, fps = 30, gap_s = 1.0;
+  double exposure_ms = 0, peak = 0, fps = 30, gap_s = 1.0, distance_m = 0, yaw_deg = 0;
   int every = 0, burst = 0, period = 0, frames = 150;
   std::vector<std::string> positional;
   for (int i = 2; i < argc; ++i) {
@@ -58,6 +59,10 @@ int main(int argc, char** argv) {
       if (std::sscanf(argv[++i], "%d/%d", &burst, &period) != 2) return usage();
     } else if (a == "--peak-deg-s" && has) {
       peak = std::atof(argv[++i]);
+    } else if (a == "--distance-m" && has) {
+      distance_m = std::atof(argv[++i]);
+    } else if (a == "--yaw-deg" && has) {
+      yaw_deg = std::atof(argv[++i]);
     } else if (a == "--frames" && has) {
       frames = std::atoi(argv[++i]);
     } else if (a == "--fps" && has) {
@@ -91,6 +96,8 @@ int main(int argc, char** argv) {
     ok = wander_sequence(positional[0], positional[1], config, frames, seed);
   } else if (verb == "degenerate" && positional.size() == 1) {
     ok = degenerate_sequence(positional[0], scene, frames);
+  } else if (verb == "wall" && positional.size() == 1) {
+    ok = wall_sequence(positional[0], distance_m, yaw_deg, frames);
   } else if (verb == "pan" && positional.size() == 1) {
     ok = pan_sequence(positional[0], peak, frames, fps);
   } else {

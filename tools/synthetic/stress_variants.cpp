@@ -422,6 +422,52 @@ bool pan_sequence(const std::string& out, double peak_deg_s, int frames, double 
   return true;
 }
 
+bool wall_sequence(const std::string& out, double distance_m, double yaw_deg, int frames) {
+  if (!(distance_m > 0.3) || !(std::fabs(yaw_deg) < 60.0) || frames < 1) {
+    return fail("wall: the distance must be over 0.3 m, the yaw within +-60 deg, frames >= 1");
+  }
+  SyntheticScene scene;  // its camera and depth units
+  const PinholeIntrinsics& k = scene.camera;
+  // Camera frame: the body is the boards' forward mounting (x forward = camera z, y right =
+  // camera x), so the wall's normal, at yaw_deg clockwise from forward, is (sin, 0, cos).
+  const double yaw = yaw_deg * M_PI / 180.0;
+  const Vector3d normal(std::sin(yaw), 0.0, std::cos(yaw)),
+      along(std::cos(yaw), 0.0, -std::sin(yaw));
+  SyntheticFrame f;
+  f.gray.resize(static_cast<size_t>(k.width_px) * k.height_px);
+  f.depth.resize(f.gray.size());
+  for (int v = 0; v < k.height_px; ++v) {
+    for (int u = 0; u < k.width_px; ++u) {
+      const Vector3d ray((u - k.cx_px) / k.fx_px, (v - k.cy_px) / k.fy_px, 1.0);
+      const double z = distance_m / normal.dot(ray);  // the ray's depth where it meets the wall
+      const Vector3d p = z * ray;
+      // 10 cm squares, so that tracking has edges to hold on to.
+      const bool light = (static_cast<int>(std::floor(p.dot(along) / 0.1)) +
+                          static_cast<int>(std::floor(p.y() / 0.1))) %
+                             2 !=
+                         0;
+      const size_t i = static_cast<size_t>(v) * k.width_px + u;
+      f.gray[i] = light ? 200 : 60;
+      f.depth[i] = z > 0 && z < scene.max_depth_m
+                       ? static_cast<uint16_t>(std::lround(z * scene.depth_factor))
+                       : 0;
+    }
+  }
+  const bool ok = create_folder(out) &&
+                  write_sequence(out, k.width_px, k.height_px, frames, 30.0,
+                                 [&](int, SE3* T_w_c) -> const SyntheticFrame& {
+                                   *T_w_c = SE3();
+                                   return f;
+                                 }) &&
+                  write_text(out + "/camera.conf", synthetic_config(scene));
+  if (!ok) return fail("cannot write the wall sequence into " + out);
+  std::printf(
+      "%s: %d frames of a wall %.2f m from the camera, its normal at %.1f deg "
+      "(config: camera.conf)\n",
+      out.c_str(), frames, distance_m, yaw_deg);
+  return true;
+}
+
 bool concatenate(const std::string& first, const std::string& second, const std::string& out,
                  double gap_s) {
   const char* names[3] = {"rgb.txt", "depth.txt", "groundtruth.txt"};

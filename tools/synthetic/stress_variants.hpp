@@ -35,6 +35,10 @@ bool there_and_back(const std::string& in, const std::string& out, const std::st
 // A synthetic room seen by a camera panning at up to peak_deg_s, with exact ground truth and
 // its config as out/camera.conf.
 bool pan_sequence(const std::string& out, double peak_deg_s, int frames, double fps);
+// A static camera, mounted looking forward (as the boards' link.T_b_c), before a textured wall
+// whose normal lies distance_m from it at yaw_deg clockwise from forward, at 30 Hz
+// (OBSTACLE_DISTANCE's geometry check: tools/mavlink-check).
+bool wall_sequence(const std::string& out, double distance_m, double yaw_deg, int frames);
 // The second sequence after the first, gap_s after its last frame (a sensor outage between
 // two passes; variants of one sequence share its ground truth's frame).
 bool concatenate(const std::string& first, const std::string& second, const std::string& out,

@@ -6,6 +6,7 @@
 // clang-format off
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
 #include <jpeglib.h>  // needs <cstdio> first
 // clang-format on
 
@@ -63,8 +64,8 @@ bool write_text(const std::string& path, const std::string& text) {
   return std::fclose(f) == 0;
 }
 
-bool write_synthetic_sequence(const std::string& dir, const SyntheticScene& scene, int frames,
-                              double fps) {
+bool write_sequence(const std::string& dir, int width, int height, int frames, double fps,
+                    const std::function<const SyntheticFrame&(int, SE3*)>& frame) {
   ::mkdir((dir + "/rgb").c_str(), 0755);
   ::mkdir((dir + "/depth").c_str(), 0755);
   std::FILE* rgb = std::fopen((dir + "/rgb.txt").c_str(), "w");
@@ -76,17 +77,15 @@ bool write_synthetic_sequence(const std::string& dir, const SyntheticScene& scen
   std::fputs("# ground truth trajectory\n# timestamp tx ty tz qx qy qz qw\n", gt);
   bool ok = true;
   const double t0 = 1000.0;  // like the benchmark, stamps far from zero
-  const std::vector<SyntheticFrame>& rendered = scene.render_path(frames, fps);
   for (int i = 0; i < frames && ok; ++i) {
     const double t = i / fps;
-    const SE3 T_w_c = scene.camera_at(t);
-    const SyntheticFrame& f = rendered[static_cast<size_t>(i)];
+    SE3 T_w_c;
+    const SyntheticFrame& f = frame(i, &T_w_c);
     char rs[32], ds[32];
     stamp(t0 + t, rs, sizeof(rs));
     stamp(t0 + t + 0.005, ds, sizeof(ds));
-    const int w = scene.camera.width_px, h = scene.camera.height_px;
-    ok = write_png_gray8(dir + "/rgb/" + rs + ".png", w, h, f.gray.data()) &&
-         write_png_gray16(dir + "/depth/" + ds + ".png", w, h, f.depth.data());
+    ok = write_png_gray8(dir + "/rgb/" + rs + ".png", width, height, f.gray.data()) &&
+         write_png_gray16(dir + "/depth/" + ds + ".png", width, height, f.depth.data());
     std::fprintf(rgb, "%s rgb/%s.png\n", rs, rs);
     std::fprintf(depth, "%s depth/%s.png\n", ds, ds);
     write_pose(gt, t0 + t, T_w_c);
@@ -95,6 +94,16 @@ bool write_synthetic_sequence(const std::string& dir, const SyntheticScene& scen
   ok = (std::fclose(depth) == 0) && ok;
   ok = (std::fclose(gt) == 0) && ok;
   return ok;
+}
+
+bool write_synthetic_sequence(const std::string& dir, const SyntheticScene& scene, int frames,
+                              double fps) {
+  const std::vector<SyntheticFrame>& rendered = scene.render_path(frames, fps);
+  return write_sequence(dir, scene.camera.width_px, scene.camera.height_px, frames, fps,
+                        [&](int i, SE3* T_w_c) -> const SyntheticFrame& {
+                          *T_w_c = scene.camera_at(i / fps);
+                          return rendered[static_cast<size_t>(i)];
+                        });
 }
 
 Params synthetic_params(const SyntheticScene& scene) {

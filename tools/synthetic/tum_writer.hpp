@@ -2,6 +2,7 @@
 // Writes PNGs and whole TUM RGB-D folders, so tests can build sequences (and break them).
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -16,8 +17,11 @@ bool write_png_gray16(const std::string& path, int w, int h, const uint16_t* px)
 // A grey image as the colour JPEG a UVC camera sends in MJPEG mode (YCbCr, 4:2:2 chroma).
 std::vector<uint8_t> encode_jpeg(const uint8_t* gray, int w, int h, int quality);
 
-// Renders `frames` frames of the scene's path at `fps` into a TUM folder (rgb/, depth/,
-// rgb.txt, depth.txt, groundtruth.txt, camera-to-world). Depth is stamped 5 ms after colour.
+// A TUM folder (rgb/, depth/, rgb.txt, depth.txt, groundtruth.txt, camera-to-world) of
+// `frames` frames at `fps`: frame(i, &T_w_c) gives each. Depth is stamped 5 ms after colour.
+bool write_sequence(const std::string& dir, int width, int height, int frames, double fps,
+                    const std::function<const SyntheticFrame&(int, SE3*)>& frame);
+// Renders `frames` frames of the scene's path at `fps` into a TUM folder (write_sequence).
 bool write_synthetic_sequence(const std::string& dir, const SyntheticScene& scene, int frames,
                               double fps);
 // Parameters matching the scene's camera and its exact sensor, whose disparity noise is the

@@ -41,6 +41,10 @@ struct Board {
   int link_system_id = 1;
   int link_component_id = 197;  // MAV_COMP_ID_VISUAL_INERTIAL_ODOMETRY
   SE3 T_b_c;                    // body from camera; "qw qx qy qz tx ty tz"
+  // OBSTACLE_DISTANCE from the depth image (0 Hz: not sent), in link.T_b_c's body frame.
+  double obstacle_rate_hz = 10.0;
+  double obstacle_lowest_m = -0.5, obstacle_highest_m = 0.5;  // the height band, up positive
+  double obstacle_fov_deg = 0.0;                              // 0: the camera's
 
   char gpio_chip[kTextBytes] = "";  // empty: no GPIO
   int gpio_led_line = -1;           // status LED, -1 = none

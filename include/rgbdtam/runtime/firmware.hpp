@@ -11,6 +11,7 @@
 
 #include <cstdint>
 
+#include "rgbdtam/core/obstacle_sectors.hpp"
 #include "rgbdtam/runtime/board.hpp"
 #include "rgbdtam/runtime/latency_stats.hpp"
 #include "rgbdtam/runtime/link_task.hpp"
@@ -28,6 +29,7 @@ struct FirmwareCounters {
   uint32_t sensor_recoveries = 0;      // frames flowing again after a stall
   uint32_t status_texts = 0;           // events posted to the link
   uint32_t sensor_texts_withheld = 0;  // sensor errors not posted: one already was, lately
+  uint32_t obstacle_reports = 0;       // OBSTACLE_DISTANCE handed to the link
 };
 
 class FirmwareRuntime {
@@ -62,6 +64,9 @@ class FirmwareRuntime {
 
  private:
   void post_event(uint8_t severity, const char* text);
+  // OBSTACLE_DISTANCE at obstacle.rate_hz, from the frame's depth (tracker thread: a 4x4
+  // subsample of the image, a few tenths of a millisecond).
+  void report_obstacles(const SensorFrame& frame);
 
   Params params_;
   Board board_;
@@ -80,6 +85,9 @@ class FirmwareRuntime {
   bool place_store_full_reported_ = false;
   bool localising_ = false;     // a map was loaded and no pose has been found in it yet
   int64_t fault_until_ns_ = 0;  // the LED shows a fault for a while after a sensor error
+  ObstacleSectorizer obstacles_;
+  int64_t obstacle_period_ns_ = 0;  // 0: not sent
+  int64_t last_obstacles_ns_ = INT64_MIN / 2;
   bool started_ = false;
 };
 

@@ -22,6 +22,8 @@ class LinkTask {
   // Tracker thread. False when the queue was full (the message is dropped and counted).
   bool post_pose(const PoseEstimate& pose, int64_t arrival_ns);
   bool post_status(uint8_t severity, const char* text);
+  // timestamp_ns: the depth frame's, in the sensor's clock (as the poses' stamps).
+  bool post_obstacles(const ObstacleSectors& sectors, int64_t timestamp_ns);
   // MAV_STATE for the heartbeat.
   void set_system_status(uint8_t state) { system_status_.store(state, std::memory_order_relaxed); }
   // Sends what is queued, then joins.

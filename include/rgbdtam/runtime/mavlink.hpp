@@ -37,6 +37,7 @@ constexpr MessageSpec kHeartbeat{0, 9, 50, "HEARTBEAT"};
 constexpr MessageSpec kStatusText{253, 54, 83, "STATUSTEXT"};
 constexpr MessageSpec kOdometry{331, 233, 91, "ODOMETRY"};
 constexpr MessageSpec kTimesync{111, 18, 34, "TIMESYNC"};
+constexpr MessageSpec kObstacleDistance{330, 167, 23, "OBSTACLE_DISTANCE"};
 // The spec of a message id this link knows, or null.
 const MessageSpec* find_spec(uint32_t id);
 
@@ -50,6 +51,7 @@ enum : uint8_t {
   kMavFrameLocalFrd = 20,
   kMavFrameBodyFrd = 12,
   kMavEstimatorTypeVision = 2,
+  kMavDistanceSensorInfrared = 2,
   kMavSeverityError = 3,
   kMavSeverityWarning = 4,
   kMavSeverityInfo = 6,
@@ -99,6 +101,18 @@ struct Odometry {
   int8_t quality = 0;  // %, -1 = failed, 0 = unknown
 };
 
+// Obstacles around the body, in sectors clockwise from angle_offset (deg from forward).
+struct ObstacleDistance {
+  uint64_t time_usec = 0;
+  uint16_t distances[72] = {};                  // cm; max_distance + 1: none; UINT16_MAX: unknown
+  uint16_t min_distance = 0, max_distance = 0;  // cm
+  uint8_t sensor_type = kMavDistanceSensorInfrared;
+  uint8_t increment = 0;   // deg, whole; increment_f wins when non-zero
+  float increment_f = 0;   // deg
+  float angle_offset = 0;  // deg, sector 0's, clockwise from forward
+  uint8_t frame = kMavFrameBodyFrd;
+};
+
 // Payload (wire order) of each message; returns the full, untruncated length.
 int pack(const Heartbeat& m, uint8_t* payload);
 int pack(const StatusText& m, uint8_t* payload);
@@ -116,11 +130,13 @@ class StatusTextJoiner {
   size_t used_ = 0;
 };
 int pack(const Odometry& m, uint8_t* payload);
+int pack(const ObstacleDistance& m, uint8_t* payload);
 // From a received payload (length as received; truncated zeros are restored).
 void unpack(const uint8_t* payload, int length, Heartbeat* m);
 void unpack(const uint8_t* payload, int length, StatusText* m);
 void unpack(const uint8_t* payload, int length, Timesync* m);
 void unpack(const uint8_t* payload, int length, Odometry* m);
+void unpack(const uint8_t* payload, int length, ObstacleDistance* m);
 
 // Frames messages from one system/component, with its own sequence counter.
 class Encoder {
@@ -141,6 +157,7 @@ class Encoder {
   static const MessageSpec& spec_of(const StatusText&) { return kStatusText; }
   static const MessageSpec& spec_of(const Odometry&) { return kOdometry; }
   static const MessageSpec& spec_of(const Timesync&) { return kTimesync; }
+  static const MessageSpec& spec_of(const ObstacleDistance&) { return kObstacleDistance; }
   uint8_t system_id_, component_id_;
   uint8_t sequence_ = 0;
 };

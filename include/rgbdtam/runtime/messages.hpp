@@ -6,6 +6,7 @@
 
 #include "rgbdtam/core/fixed_vector.hpp"
 #include "rgbdtam/core/image.hpp"
+#include "rgbdtam/core/obstacle_sectors.hpp"
 #include "rgbdtam/core/se3.hpp"
 #include "rgbdtam/core/view_alignment.hpp"
 #include "rgbdtam/runtime/mavlink.hpp"
@@ -121,10 +122,12 @@ struct MapperFrame {
 
 // Tracker (and firmware events) -> link task.
 struct LinkMessage {
-  enum class Kind : uint8_t { kPose, kStatus };
+  enum class Kind : uint8_t { kPose, kStatus, kObstacles };
   Kind kind = Kind::kPose;
   PoseEstimate pose;
   int64_t arrival_ns = 0;  // when the pose's frame arrived, on the link's clock
+  ObstacleSectors obstacles;
+  int64_t obstacles_timestamp_ns = 0;  // their depth frame's, in the sensor's clock
   uint8_t severity = 0;
   char text[mavlink::kMaxStatusTextChars + 1] = {};  // sent in 50-character STATUSTEXT chunks
 };

@@ -37,6 +37,9 @@ struct PoseLinkCounters {
   uint64_t odometry_refused = 0;       // refused by the transport (its drops/errors)
   uint64_t heartbeats_sent = 0;
   uint64_t status_texts_sent = 0;
+  uint64_t obstacles_sent = 0;  // OBSTACLE_DISTANCE, skipped and refused as ODOMETRY is
+  uint64_t obstacles_rate_limited = 0;
+  uint64_t obstacles_refused = 0;
 };
 
 // What the link has heard from the other MAVLink system on it (the autopilot).
@@ -69,6 +72,9 @@ class PoseLink {
   void init(const PoseLinkConfig& config, ByteLink* link);
   // One tracked frame (valid or not: a lost frame is reported with quality -1).
   void on_pose(const PoseEstimate& pose, int64_t now_ns);
+  // Obstacle sectors measured on the depth frame stamped timestamp_ns (sensor clock), as
+  // OBSTACLE_DISTANCE in the body frame.
+  void on_obstacles(const ObstacleSectors& sectors, int64_t timestamp_ns, int64_t now_ns);
   // An event for the operator (text is cut to 50 characters).
   void on_status(uint8_t severity, const char* text, int64_t now_ns);
   // Heartbeat and TIMESYNC requests when due, what the autopilot sent, and transport flushing;
@@ -87,12 +93,17 @@ class PoseLink {
   mavlink::Odometry odometry_of(const PoseEstimate& pose);
 
  private:
-  bool spend(int n, int64_t now_ns, bool must);
+  bool spend(int n, int64_t now_ns, bool must, int keep = 0);
   void listen(int64_t now_ns);
   void on_frame(const mavlink::Frame& f, int64_t now_ns);
   // A message that must go out (status, heartbeat, TIMESYNC): spent past the rate policy.
   template <typename Message>
   bool send_now(const Message& m, int64_t now_ns);
+  // A message the rate policy may skip (ODOMETRY, OBSTACLE_DISTANCE), counted in one of three;
+  // sent only if `keep` bytes of line time are left after it.
+  template <typename Message>
+  void send_if_room(const Message& m, int64_t now_ns, uint64_t* sent, uint64_t* rate_limited,
+                    uint64_t* refused, int keep = 0);
 
   PoseLinkConfig config_;
   ByteLink* link_ = nullptr;
