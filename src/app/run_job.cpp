@@ -356,6 +356,12 @@ void RunJob::print_summary() const {
               1e3 / board_.sensor_fps);
   std::printf("tracker task ms: median %.2f, p95 %.2f, max %.2f\n", t.percentile_ms(0.5),
               t.percentile_ms(0.95), t.max_ms());
+  const LatencyStats& latency = runtime_->link().arrival_to_odometry();
+  std::printf(
+      "latency, frame arrival to ODOMETRY sent, ms: median %.2f, p95 %.2f, max %.2f over "
+      "%lld\n",
+      latency.percentile_ms(0.5), latency.percentile_ms(0.95), latency.max_ms(),
+      static_cast<long long>(latency.count()));
   const MappingModule& m = runtime_->slam().mapper();
   std::printf("mapper task ms/keyframe: median %.1f, p95 %.1f, max %.1f over %u keyframes\n",
               m.time_per_keyframe().percentile_ms(0.5), m.time_per_keyframe().percentile_ms(0.95),

@@ -61,10 +61,15 @@ void LinkTask::stop() {
 void LinkTask::Sender::step(const LinkMessage& m) {
   const int64_t t0 = task->clock_();
   switch (m.kind) {
-    case LinkMessage::Kind::kPose:
+    case LinkMessage::Kind::kPose: {
+      const uint64_t sent = task->link_.counters().odometry_sent;
       task->link_.set_time_base(m.pose.timestamp_ns, m.arrival_ns);
       task->link_.on_pose(m.pose, t0);
+      if (task->link_.counters().odometry_sent != sent) {
+        task->arrival_to_odometry_.add(task->clock_() - m.arrival_ns);
+      }
       break;
+    }
     case LinkMessage::Kind::kStatus:
       task->link_.on_status(m.severity, m.text, t0);
       break;

@@ -223,6 +223,24 @@ TEST(Firmware, ABoardsMapFileIsSavedAtTheEndAndTheNextRunIsFoundInIt) {
   EXPECT_TRUE(second->map_saved().is_ok());
 }
 
+TEST(Firmware, EveryOdometrySentHasItsLatencyFromTheFramesArrival) {
+  testing::Monitor monitor;
+  RunJob job;
+  testing::run_board(&monitor, &job, {});
+  const LatencyStats& latency = job.runtime().link().arrival_to_odometry();
+  EXPECT_EQ(static_cast<uint64_t>(latency.count()), job.runtime().link().counters().odometry_sent);
+  EXPECT_GT(latency.count(), 0);
+  // A frame is tracked between its arrival and its ODOMETRY: never instantaneous.
+  EXPECT_GT(latency.percentile_ms(0.5), 0.0);
+  EXPECT_GE(latency.percentile_ms(0.95), latency.percentile_ms(0.5));
+  EXPECT_GE(latency.max_ms(), latency.percentile_ms(0.95));
+  std::printf(
+      "arrival to ODOMETRY ms: median %.2f, p95 %.2f, max %.2f; tracker task median "
+      "%.2f\n",
+      latency.percentile_ms(0.5), latency.percentile_ms(0.95), latency.max_ms(),
+      job.runtime().tracker_time().percentile_ms(0.5));
+}
+
 TEST(Firmware, ObstacleDistanceGoesOutAtTheBoardsRateInTheBodyFrame) {
   testing::Monitor monitor;
   RunJob job;

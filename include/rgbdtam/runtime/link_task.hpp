@@ -34,6 +34,10 @@ class LinkTask {
   const PoseLinkCounters& counters() const { return link_.counters(); }
   const PeerState& peer() const { return link_.peer(); }
   const LatencyStats& time_per_message() const { return per_message_; }
+  // From a frame's arrival (the sensor handing it over) to its ODOMETRY written to the
+  // transport, for each ODOMETRY sent: what an autopilot's vision delay parameter must cover on
+  // top of the sensor's own capture-to-arrival time.
+  const LatencyStats& arrival_to_odometry() const { return arrival_to_odometry_; }
 
  private:
   // The module on the link's thread.
@@ -50,6 +54,7 @@ class LinkTask {
   SpscRing<LinkMessage> queue_;
   ClockFn clock_ = nullptr;
   LatencyStats per_message_;
+  LatencyStats arrival_to_odometry_;
   std::atomic<uint8_t> system_status_{3};  // MAV_STATE_STANDBY
   std::atomic<uint64_t> queue_drops_{0};
   Sender sender_{this};
