@@ -233,7 +233,8 @@ TEST(Firmware, EveryOdometrySentHasItsLatencyFromTheFramesArrival) {
   // A frame is tracked between its arrival and its ODOMETRY: never instantaneous.
   EXPECT_GT(latency.percentile_ms(0.5), 0.0);
   EXPECT_GE(latency.percentile_ms(0.95), latency.percentile_ms(0.5));
-  EXPECT_GE(latency.max_ms(), latency.percentile_ms(0.95));
+  // Percentiles are read from 10 us bins, the maximum exactly.
+  EXPECT_GE(latency.max_ms() + LatencyStats::kBinNs * 1e-6, latency.percentile_ms(0.95));
   std::printf(
       "arrival to ODOMETRY ms: median %.2f, p95 %.2f, max %.2f; tracker task median "
       "%.2f\n",
