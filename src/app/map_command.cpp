@@ -11,7 +11,6 @@
 
 namespace rgbdtam {
 namespace {
-constexpr size_t kMaxMapFileBytes = size_t{4} << 30;
 
 int info_command(const char* path) {
   std::unique_ptr<uint8_t[]> data;

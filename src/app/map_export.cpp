@@ -14,7 +14,6 @@
 
 namespace rgbdtam {
 namespace {
-constexpr size_t kMaxMapFileBytes = size_t{4} << 30;
 constexpr long kMostCells = 1L << 26;
 // map_saver's trinary values and thresholds (ROS navigation's map_saver.cpp).
 constexpr uint8_t kOccupied = 0, kFree = 254, kUnknown = 205;
@@ -77,7 +76,7 @@ class Grid {
   int row(double y) const { return static_cast<int>(std::floor((y - min_y_) / resolution_)); }
   Cell& at(int c, int r) { return cells_[static_cast<size_t>(r) * width_ + c]; }
   const Cell& at(int c, int r) const { return cells_[static_cast<size_t>(r) * width_ + c]; }
-  // The cells the ray from `from` crosses before `to`'s cell (Bresenham) are seen free.
+  // The cells the ray from cell (c0, r0) crosses before cell (c1, r1) (Bresenham) are seen free.
   void clear_ray(int c0, int r0, int c1, int r1) {
     const int dc = std::abs(c1 - c0), dr = -std::abs(r1 - r0);
     const int sc = c0 < c1 ? 1 : -1, sr = r0 < r1 ? 1 : -1;

@@ -33,6 +33,9 @@ struct MapExportOptions {
 // one. *error is set when it is one but its value is bad.
 bool take_map_export_arg(int argc, char** argv, int* i, MapExportOptions* options, Status* error);
 
+// The largest map file the tools read (the format's own limit is far above any store).
+constexpr size_t kMaxMapFileBytes = size_t{4} << 30;
+
 // A map file's places, read whole (the map's own size, not a configuration's).
 struct LoadedMap {
   MapFileInfo info;
