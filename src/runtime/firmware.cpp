@@ -96,17 +96,7 @@ PoseEstimate FirmwareRuntime::on_frame(const SensorFrame& frame, int64_t arrival
   if ((pose.flags & kLoopCorrected) != 0) {
     post_event(mavlink::kMavSeverityInfo, "rgbdtam: loop closed, map corrected");
   }
-  if (!pool_full_reported_ && slam_.tracking().keyframes().recycled() > 0) {
-    pool_full_reported_ = true;
-    post_event(mavlink::kMavSeverityInfo, "rgbdtam: keyframe pool full, recycling oldest");
-  }
-  if (!place_store_full_reported_ && slam_.places().evicted() > 0) {
-    place_store_full_reported_ = true;
-    char text[mavlink::kMaxStatusTextChars + 1];
-    std::snprintf(text, sizeof(text), "rgbdtam: place store full (%d), forgetting oldest",
-                  slam_.places().capacity());
-    post_event(mavlink::kMavSeverityInfo, text);
-  }
+  report_stores_full();
   (void)link_.post_pose(pose, arrival_ns);
   report_obstacles(frame);  // needs no pose: sent whether tracking is valid or not
   const int64_t now = clock_();
@@ -152,10 +142,26 @@ void FirmwareRuntime::on_sensor_recovered(int64_t outage_ns) {
   post_event(mavlink::kMavSeverityInfo, text);
 }
 
+void FirmwareRuntime::report_stores_full() {
+  if (!pool_full_reported_ && slam_.tracking().keyframes().recycled() > 0) {
+    pool_full_reported_ = true;
+    post_event(mavlink::kMavSeverityInfo, "rgbdtam: keyframe pool full, recycling oldest");
+  }
+  if (!place_store_full_reported_ && slam_.places().evicted() > 0) {
+    place_store_full_reported_ = true;
+    char text[mavlink::kMaxStatusTextChars + 1];
+    std::snprintf(text, sizeof(text), "rgbdtam: place store full (%d), forgetting oldest",
+                  slam_.places().capacity());
+    post_event(mavlink::kMavSeverityInfo, text);
+  }
+}
+
 void FirmwareRuntime::stop() {
   if (!started_) return;
   started_ = false;
   slam_.finish();
+  // The loop module may have forgotten a place after the last frame's check (a slow board).
+  report_stores_full();
   link_.stop();
 }
 

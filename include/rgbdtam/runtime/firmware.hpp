@@ -67,6 +67,7 @@ class FirmwareRuntime {
   // OBSTACLE_DISTANCE at obstacle.rate_hz, from the frame's depth (tracker thread: a 4x4
   // subsample of the image, a few tenths of a millisecond).
   void report_obstacles(const SensorFrame& frame);
+  void report_stores_full();  // once each, when the keyframe pool or the place store first fills
 
   Params params_;
   Board board_;
