@@ -323,6 +323,25 @@ void print_peer(const PeerState& p) {
   }
   std::printf("\n");
 }
+void print_attitude(const FirmwareRuntime& runtime, const PoseLinkCounters& lc) {
+  const AttitudeAidCounters& a = runtime.attitude().counters();
+  const TrackingCounters& t = runtime.slam().tracking().counters();
+  std::printf(
+      "attitude: %llu received (%llu before TIMESYNC, %llu dropped), %u kept, %u refused; "
+      "frame %s (%u levellings, reset_counter moved %u times); rotation prior on %u frames: "
+      "%u stood, %u refused by the image",
+      static_cast<unsigned long long>(lc.attitudes),
+      static_cast<unsigned long long>(lc.attitudes_unsynced),
+      static_cast<unsigned long long>(lc.attitudes_dropped), a.samples, a.refused,
+      runtime.attitude().levelled() ? "levelled by gravity" : "the body at the first frame",
+      a.levellings, lc.frame_changes, a.priors, t.prior_used, t.prior_rejected);
+  if (lc.held_unsynced > 0 || lc.origins_sent > 0) {
+    std::printf("; %llu held for TIMESYNC; origin sent %llu times",
+                static_cast<unsigned long long>(lc.held_unsynced),
+                static_cast<unsigned long long>(lc.origins_sent));
+  }
+  std::printf("\n");
+}
 }  // namespace
 
 void RunJob::print_summary() const {
@@ -407,6 +426,7 @@ void RunJob::print_summary() const {
                 static_cast<unsigned long long>(tc.lost_bytes), std::strerror(tc.last_error));
   }
   print_peer(l.peer());
+  print_attitude(*runtime_, lc);
   std::printf("gpio: status LED %u transitions\n", runtime_->led().transitions());
 }
 

@@ -40,11 +40,11 @@ Status UdpLink::open(const char* remote_ip, uint16_t remote_port, uint16_t local
   local.sin_family = AF_INET;
   local.sin_port = htons(local_port);
   local.sin_addr.s_addr = htonl(INADDR_ANY);
-  if (local_port != 0 || remote_ip == nullptr) {
-    if (::bind(fd_, reinterpret_cast<const sockaddr*>(&local), sizeof(local)) != 0) {
-      return Status::error(StatusCode::kIoError, "UDP bind to port %u: %s", local_port,
-                           std::strerror(errno));
-    }
+  // Bound now even to an ephemeral port, so that local_port() names where the autopilot's
+  // replies arrive before the first send.
+  if (::bind(fd_, reinterpret_cast<const sockaddr*>(&local), sizeof(local)) != 0) {
+    return Status::error(StatusCode::kIoError, "UDP bind to port %u: %s", local_port,
+                         std::strerror(errno));
   }
   socklen_t len = sizeof(local);
   if (::getsockname(fd_, reinterpret_cast<sockaddr*>(&local), &len) == 0) {

@@ -97,6 +97,22 @@ const KeySpec kSpecs[] = {
     {"obstacle.fov_deg", ValueType::kReal, 0, 180, "deg",
      "span of the 72 sectors, centred on the camera's bearing (0: its horizontal field of view)",
      RGBDTAM_FIELD(obstacle_fov_deg), false},
+    {"autopilot.attitude", ValueType::kBool, 0, 1, "",
+     "use the autopilot's ATTITUDE(_QUATERNION): level ODOMETRY's frame, prior for turns",
+     RGBDTAM_FIELD(autopilot_attitude), false},
+    {"autopilot.attitude_sigma", ValueType::kDegreesAsRadians, 0.01, 10, "deg",
+     "the autopilot's attitude noise over one frame (the prior's gate is 3 of these)",
+     RGBDTAM_FIELD(autopilot_attitude_sigma_rad), false},
+    {"link.time_in_autopilot_clock", ValueType::kBool, 0, 1, "",
+     "time_usec in the autopilot's clock by TIMESYNC (held back until it answers)",
+     RGBDTAM_FIELD(link_time_in_autopilot_clock), false},
+    {"origin.latitude_deg", ValueType::kReal, -90, 90, "deg",
+     "geographic origin sent as SET_GPS_GLOBAL_ORIGIN when the autopilot is heard (WGS84)",
+     RGBDTAM_FIELD(origin_latitude_deg), false},
+    {"origin.longitude_deg", ValueType::kReal, -180, 180, "deg", "its longitude (WGS84)",
+     RGBDTAM_FIELD(origin_longitude_deg), false},
+    {"origin.altitude_m", ValueType::kReal, -1000, 10000, "m", "its altitude above mean sea level",
+     RGBDTAM_FIELD(origin_altitude_m), false},
     RGBDTAM_TEXT("gpio.chip", "GPIO chip device (empty: no GPIO)", gpio_chip, false),
     {"gpio.led_line", ValueType::kInt, -1, 1023, "", "status LED line (-1: none)",
      RGBDTAM_FIELD(gpio_led_line), false},
@@ -238,6 +254,11 @@ Status validate_board(const Board& b) {
                          "board '%s': obstacle.lowest_m (%.2f) must be below obstacle.highest_m "
                          "(%.2f)",
                          b.name, b.obstacle_lowest_m, b.obstacle_highest_m);
+  }
+  if (std::isnan(b.origin_latitude_deg) != std::isnan(b.origin_longitude_deg)) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "board '%s': origin.latitude_deg and origin.longitude_deg go together",
+                         b.name);
   }
   if (!one_of(b.link_kind, kLinks, 2)) {
     return Status::error(StatusCode::kInvalidArgument,

@@ -1,5 +1,6 @@
 #include "rgbdtam/runtime/firmware.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 
@@ -21,7 +22,18 @@ Status FirmwareRuntime::init(const Params& params, const Board& board, ByteLink*
   link_config.system_id = static_cast<uint8_t>(board.link_system_id);
   link_config.component_id = static_cast<uint8_t>(board.link_component_id);
   link_config.T_b_c = board.T_b_c;
+  link_config.time_in_autopilot_clock = board.link_time_in_autopilot_clock;
+  link_config.send_origin = !std::isnan(board.origin_latitude_deg);
+  if (link_config.send_origin) {  // validated: both set, within range
+    link_config.origin_latitude_e7 =
+        static_cast<int32_t>(std::lround(board.origin_latitude_deg * 1e7));
+    link_config.origin_longitude_e7 =
+        static_cast<int32_t>(std::lround(board.origin_longitude_deg * 1e7));
+    link_config.origin_altitude_mm =
+        static_cast<int32_t>(std::lround(board.origin_altitude_m * 1e3));
+  }
   link_.init(link_config, link, kLinkQueueSlots, clock);
+  attitude_.init(board.T_b_c, board.autopilot_attitude_sigma_rad);
   led_.init(gpio, board.gpio_led_line);
   if (board.obstacle_rate_hz > 0) {
     ObstacleOptions options;
@@ -70,7 +82,13 @@ PoseEstimate FirmwareRuntime::on_frame(const SensorFrame& frame, int64_t arrival
   const int64_t t0 = clock_();
   const bool trigger = gpio_ != nullptr && board_.gpio_trigger_line >= 0;
   if (trigger) gpio_->set(board_.gpio_trigger_line, true);  // the next exposure starts now
+  if (board_.autopilot_attitude) {
+    link_.take_attitudes([this](const AttitudeSample& s) { attitude_.add(s); });
+    const int64_t last_ns = slam_.tracking().last_tracked_ns();
+    if (last_ns >= 0) slam_.set_rotation_prior(attitude_.prior(last_ns, frame.timestamp_ns));
+  }
   const PoseEstimate pose = slam_.track(frame);
+  attitude_.on_pose(pose);
   ++counters_.frames;
   const bool valid = (pose.flags & kPoseValid) != 0;
   if (valid) ++counters_.tracked;
@@ -97,7 +115,7 @@ PoseEstimate FirmwareRuntime::on_frame(const SensorFrame& frame, int64_t arrival
     post_event(mavlink::kMavSeverityInfo, "rgbdtam: loop closed, map corrected");
   }
   report_stores_full();
-  (void)link_.post_pose(pose, arrival_ns);
+  (void)link_.post_pose(pose, arrival_ns, attitude_.levelled() ? &attitude_.q_l_w() : nullptr);
   report_obstacles(frame);  // needs no pose: sent whether tracking is valid or not
   const int64_t now = clock_();
   LedState state = valid                                                 ? LedState::kTracking

@@ -9,13 +9,18 @@ void LinkTask::init(const PoseLinkConfig& config, ByteLink* link, int queue_slot
   transport_ = link;
   link_.init(config, link);
   queue_.allocate(queue_slots);
+  // Half a second of attitudes at 100 Hz: the tracker takes them every frame.
+  constexpr int kAttitudeSlots = 64;
+  attitudes_.allocate(kAttitudeSlots);
+  link_.send_attitudes_to(&attitudes_);
   clock_ = clock;
 }
 
 Status LinkTask::start(const ThreadPlacement& placement) {
-  // The heartbeat's 1 Hz needs a tick at least every 100 ms even without traffic.
+  // Ticks every 10 ms even without traffic: the heartbeat's 1 Hz, and the autopilot's attitude
+  // (50-100 Hz) reaching the tracker before the next frame rather than after it.
   return worker_.start(&queue_, &sender_, placement, "rgbdtam-link",
-                       std::chrono::milliseconds(100));
+                       std::chrono::milliseconds(10));
 }
 
 bool LinkTask::post(const LinkMessage& m) {
@@ -30,11 +35,14 @@ bool LinkTask::post(const LinkMessage& m) {
   return true;
 }
 
-bool LinkTask::post_pose(const PoseEstimate& pose, int64_t arrival_ns) {
+bool LinkTask::post_pose(const PoseEstimate& pose, int64_t arrival_ns,
+                         const Eigen::Quaterniond* q_l_w) {
   LinkMessage m;
   m.kind = LinkMessage::Kind::kPose;
   m.pose = pose;
   m.arrival_ns = arrival_ns;
+  m.levelled = q_l_w != nullptr;
+  if (q_l_w != nullptr) m.q_l_w = *q_l_w;
   return post(m);
 }
 
@@ -64,6 +72,7 @@ void LinkTask::Sender::step(const LinkMessage& m) {
     case LinkMessage::Kind::kPose: {
       const uint64_t sent = task->link_.counters().odometry_sent;
       task->link_.set_time_base(m.pose.timestamp_ns, m.arrival_ns);
+      if (m.levelled) task->link_.set_level(m.q_l_w);
       task->link_.on_pose(m.pose, t0);
       if (task->link_.counters().odometry_sent != sent) {
         task->arrival_to_odometry_.add(task->clock_() - m.arrival_ns);

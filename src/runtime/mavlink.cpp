@@ -66,88 +66,176 @@ uint16_t crc_accumulate(const uint8_t* bytes, size_t n, uint16_t crc) {
 }
 
 const MessageSpec* find_spec(uint32_t id) {
-  static constexpr const MessageSpec* kKnown[] = {&kHeartbeat, &kStatusText, &kOdometry, &kTimesync,
-                                                  &kObstacleDistance};
+  static constexpr const MessageSpec* kKnown[] = {
+      &kHeartbeat,        &kStatusText, &kOdometry,           &kTimesync,
+      &kObstacleDistance, &kAttitude,   &kAttitudeQuaternion, &kSetGpsGlobalOrigin};
   for (const MessageSpec* s : kKnown) {
     if (s->id == id) return s;
   }
   return nullptr;
 }
 
+namespace {
 // Each message's fields in wire order, written once for packing and unpacking: sorted by type
 // size (stable), then the extensions as declared.
-template <typename M, typename F>
-void heartbeat_fields(M& m, F&& f) {
-  f(m.custom_mode);
-  f(m.type);
-  f(m.autopilot);
-  f(m.base_mode);
-  f(m.system_status);
-  f(m.mavlink_version);
-}
+template <typename Message>
+struct Fields;
 
-template <typename M, typename F>
-void status_text_fields(M& m, F&& f) {
-  f(m.severity);
-  f(m.text);
-  f(m.id);
-  f(m.chunk_seq);
-}
+template <>
+struct Fields<Heartbeat> {
+  static constexpr const MessageSpec& kSpec = kHeartbeat;
+  template <typename M, typename F>
+  static void each(M& m, F&& f) {
+    f(m.custom_mode);
+    f(m.type);
+    f(m.autopilot);
+    f(m.base_mode);
+    f(m.system_status);
+    f(m.mavlink_version);
+  }
+};
 
-template <typename M, typename F>
-void timesync_fields(M& m, F&& f) {
-  f(m.tc1);
-  f(m.ts1);
-  f(m.target_system);
-  f(m.target_component);
-}
+template <>
+struct Fields<StatusText> {
+  static constexpr const MessageSpec& kSpec = kStatusText;
+  template <typename M, typename F>
+  static void each(M& m, F&& f) {
+    f(m.severity);
+    f(m.text);
+    f(m.id);
+    f(m.chunk_seq);
+  }
+};
 
-template <typename M, typename F>
-void odometry_fields(M& m, F&& f) {
-  f(m.time_usec);
-  f(m.x);
-  f(m.y);
-  f(m.z);
-  f(m.q);
-  f(m.vx);
-  f(m.vy);
-  f(m.vz);
-  f(m.rollspeed);
-  f(m.pitchspeed);
-  f(m.yawspeed);
-  f(m.pose_covariance);
-  f(m.velocity_covariance);
-  f(m.frame_id);
-  f(m.child_frame_id);
-  f(m.reset_counter);
-  f(m.estimator_type);
-  f(m.quality);
-}
+template <>
+struct Fields<Timesync> {
+  static constexpr const MessageSpec& kSpec = kTimesync;
+  template <typename M, typename F>
+  static void each(M& m, F&& f) {
+    f(m.tc1);
+    f(m.ts1);
+    f(m.target_system);
+    f(m.target_component);
+  }
+};
 
-template <typename M, typename F>
-void obstacle_distance_fields(M& m, F&& f) {
-  f(m.time_usec);
-  f(m.distances);
-  f(m.min_distance);
-  f(m.max_distance);
-  f(m.sensor_type);
-  f(m.increment);
-  f(m.increment_f);
-  f(m.angle_offset);
-  f(m.frame);
-}
+template <>
+struct Fields<Odometry> {
+  static constexpr const MessageSpec& kSpec = kOdometry;
+  template <typename M, typename F>
+  static void each(M& m, F&& f) {
+    f(m.time_usec);
+    f(m.x);
+    f(m.y);
+    f(m.z);
+    f(m.q);
+    f(m.vx);
+    f(m.vy);
+    f(m.vz);
+    f(m.rollspeed);
+    f(m.pitchspeed);
+    f(m.yawspeed);
+    f(m.pose_covariance);
+    f(m.velocity_covariance);
+    f(m.frame_id);
+    f(m.child_frame_id);
+    f(m.reset_counter);
+    f(m.estimator_type);
+    f(m.quality);
+  }
+};
 
-int pack(const Heartbeat& m, uint8_t* payload) {
+template <>
+struct Fields<ObstacleDistance> {
+  static constexpr const MessageSpec& kSpec = kObstacleDistance;
+  template <typename M, typename F>
+  static void each(M& m, F&& f) {
+    f(m.time_usec);
+    f(m.distances);
+    f(m.min_distance);
+    f(m.max_distance);
+    f(m.sensor_type);
+    f(m.increment);
+    f(m.increment_f);
+    f(m.angle_offset);
+    f(m.frame);
+  }
+};
+
+template <>
+struct Fields<Attitude> {
+  static constexpr const MessageSpec& kSpec = kAttitude;
+  template <typename M, typename F>
+  static void each(M& m, F&& f) {
+    f(m.time_boot_ms);
+    f(m.roll);
+    f(m.pitch);
+    f(m.yaw);
+    f(m.rollspeed);
+    f(m.pitchspeed);
+    f(m.yawspeed);
+  }
+};
+
+template <>
+struct Fields<AttitudeQuaternion> {
+  static constexpr const MessageSpec& kSpec = kAttitudeQuaternion;
+  template <typename M, typename F>
+  static void each(M& m, F&& f) {
+    f(m.time_boot_ms);
+    f(m.q);
+    f(m.rollspeed);
+    f(m.pitchspeed);
+    f(m.yawspeed);
+    f(m.repr_offset_q);
+  }
+};
+
+template <>
+struct Fields<SetGpsGlobalOrigin> {
+  static constexpr const MessageSpec& kSpec = kSetGpsGlobalOrigin;
+  template <typename M, typename F>
+  static void each(M& m, F&& f) {
+    f(m.latitude);
+    f(m.longitude);
+    f(m.altitude);
+    f(m.target_system);
+    f(m.time_usec);
+  }
+};
+
+template <typename M>
+int pack_fields(const M& m, uint8_t* payload) {
   Writer w(payload);
-  heartbeat_fields(m, [&](const auto& v) { w.put(v); });
+  Fields<M>::each(m, [&](const auto& v) { w.put(v); });
   return w.size();
 }
 
-int pack(const StatusText& m, uint8_t* payload) {
-  Writer w(payload);
-  status_text_fields(m, [&](const auto& v) { w.put(v); });
-  return w.size();
+template <typename M>
+void unpack_fields(const uint8_t* payload, int length, M* m) {
+  uint8_t scratch[kMaxPayloadBytes];
+  Reader r(padded(payload, length, Fields<M>::kSpec.payload_bytes, scratch));
+  Fields<M>::each(*m, [&](auto& v) { r.get(&v); });
 }
+}  // namespace
+
+int pack(const Heartbeat& m, uint8_t* payload) { return pack_fields(m, payload); }
+int pack(const StatusText& m, uint8_t* payload) { return pack_fields(m, payload); }
+int pack(const Timesync& m, uint8_t* payload) { return pack_fields(m, payload); }
+int pack(const Odometry& m, uint8_t* payload) { return pack_fields(m, payload); }
+int pack(const ObstacleDistance& m, uint8_t* payload) { return pack_fields(m, payload); }
+int pack(const Attitude& m, uint8_t* payload) { return pack_fields(m, payload); }
+int pack(const AttitudeQuaternion& m, uint8_t* payload) { return pack_fields(m, payload); }
+int pack(const SetGpsGlobalOrigin& m, uint8_t* payload) { return pack_fields(m, payload); }
+
+void unpack(const uint8_t* p, int length, Heartbeat* m) { unpack_fields(p, length, m); }
+void unpack(const uint8_t* p, int length, StatusText* m) { unpack_fields(p, length, m); }
+void unpack(const uint8_t* p, int length, Timesync* m) { unpack_fields(p, length, m); }
+void unpack(const uint8_t* p, int length, Odometry* m) { unpack_fields(p, length, m); }
+void unpack(const uint8_t* p, int length, ObstacleDistance* m) { unpack_fields(p, length, m); }
+void unpack(const uint8_t* p, int length, Attitude* m) { unpack_fields(p, length, m); }
+void unpack(const uint8_t* p, int length, AttitudeQuaternion* m) { unpack_fields(p, length, m); }
+void unpack(const uint8_t* p, int length, SetGpsGlobalOrigin* m) { unpack_fields(p, length, m); }
 
 const char* StatusTextJoiner::add(const StatusText& m) {
   if (m.id == 0 || m.chunk_seq == 0) used_ = 0;
@@ -157,54 +245,6 @@ const char* StatusTextJoiner::add(const StatusText& m) {
   text_[used_] = '\0';
   const bool more = m.id != 0 && chars == sizeof(m.text);  // the last chunk holds a NUL
   return more ? nullptr : text_;
-}
-
-int pack(const Timesync& m, uint8_t* payload) {
-  Writer w(payload);
-  timesync_fields(m, [&](const auto& v) { w.put(v); });
-  return w.size();
-}
-
-int pack(const Odometry& m, uint8_t* payload) {
-  Writer w(payload);
-  odometry_fields(m, [&](const auto& v) { w.put(v); });
-  return w.size();
-}
-
-int pack(const ObstacleDistance& m, uint8_t* payload) {
-  Writer w(payload);
-  obstacle_distance_fields(m, [&](const auto& v) { w.put(v); });
-  return w.size();
-}
-
-void unpack(const uint8_t* payload, int length, Heartbeat* m) {
-  uint8_t scratch[kMaxPayloadBytes];
-  Reader r(padded(payload, length, kHeartbeat.payload_bytes, scratch));
-  heartbeat_fields(*m, [&](auto& v) { r.get(&v); });
-}
-
-void unpack(const uint8_t* payload, int length, StatusText* m) {
-  uint8_t scratch[kMaxPayloadBytes];
-  Reader r(padded(payload, length, kStatusText.payload_bytes, scratch));
-  status_text_fields(*m, [&](auto& v) { r.get(&v); });
-}
-
-void unpack(const uint8_t* payload, int length, Timesync* m) {
-  uint8_t scratch[kMaxPayloadBytes];
-  Reader r(padded(payload, length, kTimesync.payload_bytes, scratch));
-  timesync_fields(*m, [&](auto& v) { r.get(&v); });
-}
-
-void unpack(const uint8_t* payload, int length, Odometry* m) {
-  uint8_t scratch[kMaxPayloadBytes];
-  Reader r(padded(payload, length, kOdometry.payload_bytes, scratch));
-  odometry_fields(*m, [&](auto& v) { r.get(&v); });
-}
-
-void unpack(const uint8_t* payload, int length, ObstacleDistance* m) {
-  uint8_t scratch[kMaxPayloadBytes];
-  Reader r(padded(payload, length, kObstacleDistance.payload_bytes, scratch));
-  obstacle_distance_fields(*m, [&](auto& v) { r.get(&v); });
 }
 
 int Encoder::frame(const MessageSpec& spec, const uint8_t* payload, int length, uint8_t* out) {

@@ -23,16 +23,45 @@ void PoseLink::init(const PoseLinkConfig& config, ByteLink* link) {
   encoder_ = mavlink::Encoder(config.system_id, config.component_id);
 }
 
+bool PoseLink::stamp_usec(int64_t sensor_ns, uint64_t* usec) const {
+  int64_t t_ns = sensor_ns;
+  if (config_.time_in_autopilot_clock) {
+    if (peer_.timesync_replies == 0) return false;
+    t_ns += peer_.clock_offset_ns;
+  }
+  *usec = static_cast<uint64_t>(std::max<int64_t>(0, t_ns / 1000));
+  return true;
+}
+
+SE3 PoseLink::T_l_w() const {
+  // Unlevelled, the local frame is the body at the world's origin: T_l_w = T_b_c. Levelled, that
+  // body turned so that gravity is down, about its own origin.
+  if (!levelled_) return config_.T_b_c;
+  const Eigen::Quaterniond q_l_b0 = q_l_w_ * config_.T_b_c.quaternion().conjugate();
+  return SE3(q_l_b0, Vector3d::Zero()) * config_.T_b_c;
+}
+
+void PoseLink::set_level(const Eigen::Quaterniond& q_l_w) {
+  if (levelled_ && q_l_w_.coeffs() == q_l_w.coeffs()) return;
+  if (valid_sent_in_frame_) {
+    ++counters_.frame_changes;
+    valid_sent_in_frame_ = false;
+  }
+  levelled_ = true;
+  q_l_w_ = q_l_w;
+  have_previous_ = false;  // no velocity across the change
+}
+
 mavlink::Odometry PoseLink::odometry_of(const PoseEstimate& pose) {
   mavlink::Odometry o;
-  o.time_usec = static_cast<uint64_t>(std::max<int64_t>(0, pose.timestamp_ns / 1000));
+  (void)stamp_usec(pose.timestamp_ns, &o.time_usec);
   o.frame_id = config_.frame_id;
   o.child_frame_id = config_.child_frame_id;
-  o.reset_counter = static_cast<uint8_t>(pose.reset_counter);
+  const uint32_t reset_counter = pose.reset_counter + counters_.frame_changes;
+  o.reset_counter = static_cast<uint8_t>(reset_counter);
   o.estimator_type = mavlink::kMavEstimatorTypeVision;
   o.velocity_covariance[0] = NAN;  // unknown
-  // The local frame is the body at the first frame: T_l_b = T_b_c T_w_c T_c_b.
-  const SE3 T_l_b = config_.T_b_c * pose.T_w_c * config_.T_b_c.inverse();
+  const SE3 T_l_b = T_l_w() * pose.T_w_c * config_.T_b_c.inverse();
   // A pose that is not finite never goes out as valid, whatever flagged it.
   const bool finite = T_l_b.translation().allFinite() && T_l_b.quaternion().coeffs().allFinite();
   if ((pose.flags & kPoseValid) == 0 || !finite) {
@@ -53,7 +82,7 @@ mavlink::Odometry PoseLink::odometry_of(const PoseEstimate& pose) {
   o.q[2] = static_cast<float>(q.y());
   o.q[3] = static_cast<float>(q.z());
   const double dt_s = (pose.timestamp_ns - previous_ns_) * 1e-9;
-  if (have_previous_ && pose.reset_counter == previous_reset_ && dt_s > 0) {
+  if (have_previous_ && reset_counter == previous_reset_ && dt_s > 0) {
     const SE3 T_prev_now = T_l_b_previous_.inverse() * T_l_b;  // body motion, in the body
     const Vector3d v =
         T_l_b.rotation().transpose() * (T_l_b.translation() - T_l_b_previous_.translation()) / dt_s;
@@ -70,12 +99,13 @@ mavlink::Odometry PoseLink::odometry_of(const PoseEstimate& pose) {
   have_previous_ = true;
   T_l_b_previous_ = T_l_b;
   previous_ns_ = pose.timestamp_ns;
-  previous_reset_ = pose.reset_counter;
+  previous_reset_ = reset_counter;
+  valid_sent_in_frame_ = true;
   // The Gauss-Newton information is over a camera-frame twist (v, omega); rotate both blocks
   // into the local frame. Rotation variances are small-angle, about the local axes.
   const Eigen::Matrix<double, 6, 6> cov_c = pose_covariance(pose);
   if (cov_c.allFinite()) {
-    const Matrix3d R_l_c = (config_.T_b_c * pose.T_w_c).rotation();
+    const Matrix3d R_l_c = (T_l_w() * pose.T_w_c).rotation();
     Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Zero();
     A.topLeftCorner<3, 3>() = R_l_c;
     A.bottomRightCorner<3, 3>() = R_l_c;
@@ -120,13 +150,21 @@ void PoseLink::send_if_room(const Message& m, int64_t now_ns, uint64_t* sent,
 }
 
 void PoseLink::on_pose(const PoseEstimate& pose, int64_t now_ns) {
+  uint64_t usec = 0;
+  if (!stamp_usec(pose.timestamp_ns, &usec)) {
+    ++counters_.held_unsynced;
+    return;
+  }
   send_if_room(odometry_of(pose), now_ns, &counters_.odometry_sent,
                &counters_.odometry_rate_limited, &counters_.odometry_refused);
 }
 
 void PoseLink::on_obstacles(const ObstacleSectors& sectors, int64_t timestamp_ns, int64_t now_ns) {
   mavlink::ObstacleDistance m;
-  m.time_usec = static_cast<uint64_t>(std::max<int64_t>(0, timestamp_ns / 1000));
+  if (!stamp_usec(timestamp_ns, &m.time_usec)) {
+    ++counters_.held_unsynced;
+    return;
+  }
   std::copy(sectors.distance_cm, sectors.distance_cm + ObstacleSectors::kCount, m.distances);
   m.min_distance = sectors.min_cm;
   m.max_distance = sectors.max_cm;
@@ -173,10 +211,13 @@ void PoseLink::on_status(uint8_t severity, const char* text, int64_t now_ns) {
 void PoseLink::on_frame(const mavlink::Frame& f, int64_t now_ns) {
   if (f.system_id == config_.system_id && f.component_id == config_.component_id) return;
   ++peer_.frames;
+  const bool from_peer =
+      peer_.heard && f.system_id == peer_.system_id && f.component_id == peer_.component_id;
   if (f.message_id == mavlink::kHeartbeat.id) {
     mavlink::Heartbeat hb;
     mavlink::unpack(f.payload, f.length, &hb);
     // The operator learns when the autopilot appears and when it comes back.
+    const bool newly_back = peer_.heard && peer_.silent;
     if (!peer_.heard || peer_.silent) {
       char text[mavlink::kMaxStatusTextChars + 1];
       std::snprintf(text, sizeof(text),
@@ -192,6 +233,37 @@ void PoseLink::on_frame(const mavlink::Frame& f, int64_t now_ns) {
     peer_.type = hb.type;
     peer_.last_heartbeat_ns = now_ns;
     ++peer_.heartbeats;
+    // An autopilot heard for the first time, or again after a silence (it may have rebooted),
+    // is told where its origin is, so that modes needing one work without GPS.
+    if (config_.send_origin && (peer_.heartbeats == 1 || newly_back)) {
+      mavlink::SetGpsGlobalOrigin origin;
+      origin.latitude = config_.origin_latitude_e7;
+      origin.longitude = config_.origin_longitude_e7;
+      origin.altitude = config_.origin_altitude_mm;
+      origin.target_system = f.system_id;
+      if (send_now(origin, now_ns)) ++counters_.origins_sent;
+    }
+  } else if (f.message_id == mavlink::kAttitudeQuaternion.id && from_peer) {
+    mavlink::AttitudeQuaternion a;
+    mavlink::unpack(f.payload, f.length, &a);
+    on_attitude(a);
+  } else if (f.message_id == mavlink::kAttitude.id && from_peer) {
+    mavlink::Attitude e;
+    mavlink::unpack(f.payload, f.length, &e);
+    // Aerospace Euler angles: yaw, then pitch, then roll.
+    const Eigen::Quaterniond q = Eigen::AngleAxisd(e.yaw, Vector3d::UnitZ()) *
+                                 Eigen::AngleAxisd(e.pitch, Vector3d::UnitY()) *
+                                 Eigen::AngleAxisd(e.roll, Vector3d::UnitX());
+    mavlink::AttitudeQuaternion a;
+    a.time_boot_ms = e.time_boot_ms;
+    a.q[0] = static_cast<float>(q.w());
+    a.q[1] = static_cast<float>(q.x());
+    a.q[2] = static_cast<float>(q.y());
+    a.q[3] = static_cast<float>(q.z());
+    a.rollspeed = e.rollspeed;
+    a.pitchspeed = e.pitchspeed;
+    a.yawspeed = e.yawspeed;
+    on_attitude(a);
   } else if (f.message_id == mavlink::kTimesync.id) {
     mavlink::Timesync t;
     mavlink::unpack(f.payload, f.length, &t);
@@ -220,6 +292,26 @@ void PoseLink::on_frame(const mavlink::Frame& f, int64_t now_ns) {
   }
 }
 
+void PoseLink::on_attitude(const mavlink::AttitudeQuaternion& a) {
+  if (attitudes_ == nullptr) return;
+  if (peer_.timesync_replies == 0) {
+    ++counters_.attitudes_unsynced;
+    return;
+  }
+  AttitudeSample* s = attitudes_->begin_push();
+  if (s == nullptr) {
+    ++counters_.attitudes_dropped;
+    return;
+  }
+  s->t_ns = static_cast<int64_t>(a.time_boot_ms) * 1'000'000 - peer_.clock_offset_ns;
+  s->q_n_b = Eigen::Quaterniond(a.q[0], a.q[1], a.q[2], a.q[3]);
+  s->rate_b_rad_s = Vector3d(a.rollspeed, a.pitchspeed, a.yawspeed);
+  // The offset is known to half a round trip; time_boot_ms to half a millisecond.
+  s->timing_sigma_s = 0.5e-9 * static_cast<double>(peer_.best_round_trip_ns) + 0.5e-3;
+  attitudes_->publish();
+  ++counters_.attitudes;
+}
+
 void PoseLink::listen(int64_t now_ns) {
   // Bounded, so that a flood of bytes cannot keep the link from sending.
   constexpr int kMaxReadsPerTick = 64;
@@ -243,16 +335,24 @@ void PoseLink::tick(int64_t now_ns, uint8_t system_status) {
     mavlink::Heartbeat hb;
     hb.system_status = system_status;
     if (send_now(hb, now_ns)) ++counters_.heartbeats_sent;
-    // Our own TIMESYNC, once a second to a peer that is there, measures its clock.
-    if (peer_.heard && !peer_.silent) {
-      mavlink::Timesync request;
-      request.ts1 = now_ns + sensor_minus_now_ns_;
-      request.target_system = peer_.system_id;
-      request.target_component = peer_.component_id;
-      timesync_sent_ns_ = now_ns;
-      timesync_sent_ts1_ = request.ts1;
-      (void)send_now(request, now_ns);
-    }
+  }
+  // Our own TIMESYNC to a peer that is there measures its clock: once a second, and every
+  // 100 ms for its first ten until it answers (its attitudes, and stamps in its clock, wait for
+  // that; one that never answers is not flooded).
+  constexpr uint32_t kQuickRequests = 10;
+  const bool quick = peer_.timesync_replies == 0 && peer_.timesync_requests < kQuickRequests;
+  const int64_t timesync_period_ns = quick ? 100'000'000 : 1'000'000'000;
+  if (peer_.heard && !peer_.silent &&
+      (last_timesync_ns_ < 0 || now_ns - last_timesync_ns_ >= timesync_period_ns)) {
+    last_timesync_ns_ = now_ns;
+    mavlink::Timesync request;
+    request.ts1 = now_ns + sensor_minus_now_ns_;
+    request.target_system = peer_.system_id;
+    request.target_component = peer_.component_id;
+    timesync_sent_ns_ = now_ns;
+    timesync_sent_ts1_ = request.ts1;
+    (void)send_now(request, now_ns);
+    ++peer_.timesync_requests;
   }
   link_->flush();
 }

@@ -12,7 +12,10 @@ namespace {
 // length, so 4-degree steps leave no gap.
 constexpr double kGuessTurnStepRad = 4.0 * M_PI / 180.0;
 constexpr int kMaxGuessTurns = 4;  // 16 degrees: 480 deg/s over one 30 Hz frame
-constexpr int kMaxGuesses = 4 + 6 * kMaxGuessTurns;
+constexpr int kMaxGuesses = 5 + 6 * kMaxGuessTurns;
+// A prior and the image agree when they differ by less than this many of the prior's standard
+// deviations (the image's own rotation error, some 0.05 degrees, is small beside it).
+constexpr double kPriorGateSigmas = 3.0;
 // A velocity estimated across a longer gap (a loss, dropped frames) is not a velocity.
 constexpr int64_t kMaxVelocityGapNs = 200'000'000;
 }  // namespace
@@ -87,6 +90,31 @@ TrackingPipeline::Attempt TrackingPipeline::track_against(Keyframe* kf, const SE
   return a;
 }
 
+bool TrackingPipeline::prior_applies(int64_t t_ns) const {
+  return prior_.valid && has_last_ && prior_.from_ns == last_ns_ && prior_.to_ns == t_ns;
+}
+
+SE3 TrackingPipeline::turned_by_prior(const SE3& predicted) const {
+  return SE3(T_w_last_.quaternion() * prior_.q_c0_c1, predicted.translation());
+}
+
+TrackingPipeline::Attempt TrackingPipeline::track_first(int64_t t_ns) {
+  const SE3 predicted = predict_pose(t_ns);
+  if (prior_applies(t_ns) && previous_valid_) {
+    Attempt a = track_against(reference_, turned_by_prior(predicted), t_ns);
+    const double disagreement =
+        angle_between(prior_.q_c0_c1, T_w_last_.quaternion().conjugate() * a.T_w_c().quaternion());
+    if (a.failed == 0 && disagreement <= kPriorGateSigmas * prior_.sigma_rad) {
+      ++counters_.prior_used;
+      return a;
+    }
+    // Never forced: the frame is tracked as without it, and no later guess uses it.
+    ++counters_.prior_rejected;
+    prior_.valid = false;
+  }
+  return track_against(reference_, predicted, t_ns);
+}
+
 TrackingPipeline::Attempt TrackingPipeline::track_from_guesses(Keyframe* kf, int64_t t_ns) {
   const SE3 predicted = predict_pose(t_ns);
   SE3 guesses[kMaxGuesses];
@@ -94,7 +122,8 @@ TrackingPipeline::Attempt TrackingPipeline::track_from_guesses(Keyframe* kf, int
   const SE3 T_k_w = kf->T_w_k.inverse();
   auto add = [&](const SE3& T_w_c) { guesses[n++] = T_k_w * T_w_c; };
   add(predicted);
-  add(T_w_last_);  // the camera stopped
+  if (prior_applies(t_ns)) add(turned_by_prior(predicted));  // a turn faster than the basin
+  add(T_w_last_);                                            // the camera stopped
   const double dt = static_cast<double>(t_ns - last_ns_) * 1e-9;
   add(T_w_last_ * SE3::exp(velocity_ * (0.5 * dt)));  // it slowed down ...
   add(T_w_last_ * SE3::exp(velocity_ * (2.0 * dt)));  // ... or sped up
@@ -262,7 +291,7 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
   for (int i = 0; i < pool_->size(); ++i) adopt_map(&pool_->at(i));
   adopt_corrections();
   const int64_t t = frame.timestamp_ns;
-  Attempt a = track_against(reference_, predict_pose(t), t);
+  Attempt a = track_first(t);
   // One term alone only while tracking is continuous: from an uncertain guess (after a loss,
   // or from the wider basin) one term can fit the wrong place (planes slide along planes).
   if (previous_valid_) a = without_misfit_term(a, t);

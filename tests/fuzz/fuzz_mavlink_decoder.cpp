@@ -18,7 +18,15 @@ void check_round_trip(const Frame& f) {
   StatusText st;
   Odometry od;
   Timesync ts;
+  ObstacleDistance obstacles;
+  Attitude attitude;
+  AttitudeQuaternion attitude_q;
+  SetGpsGlobalOrigin origin;
   if (spec == &kTimesync) unpack(f.payload, f.length, &ts);
+  if (spec == &kObstacleDistance) unpack(f.payload, f.length, &obstacles);
+  if (spec == &kAttitude) unpack(f.payload, f.length, &attitude);
+  if (spec == &kAttitudeQuaternion) unpack(f.payload, f.length, &attitude_q);
+  if (spec == &kSetGpsGlobalOrigin) unpack(f.payload, f.length, &origin);
   if (spec == &kHeartbeat) unpack(f.payload, f.length, &hb);
   if (spec == &kStatusText) unpack(f.payload, f.length, &st);
   if (spec == &kOdometry) unpack(f.payload, f.length, &od);

@@ -15,6 +15,7 @@ void Monitor::drain(const SE3& T_b_c) {
         mavlink::Odometry o;
         mavlink::unpack(f.payload, f.length, &o);
         ++odometry;
+        odometry_messages.push_back(o);
         if (o.quality < 0) {
           ++lost;
         } else {
@@ -30,6 +31,7 @@ void Monitor::drain(const SE3& T_b_c) {
         mavlink::unpack(f.payload, f.length, &t);
         if (const char* whole = joiner.add(t)) texts.emplace_back(whole);
       }
+      if (on_frame) on_frame(f);
     });
   }
 }
@@ -50,7 +52,10 @@ void run_board(Monitor* monitor, RunJob* job, std::vector<std::string> overrides
   const Status s = job->init(options);
   ASSERT_TRUE(s.is_ok()) << s.message();
   ASSERT_TRUE(job->start().is_ok());
-  while (job->step()) monitor->drain(job->board().T_b_c);
+  while (job->step()) {
+    monitor->drain(job->board().T_b_c);
+    if (monitor->on_step) monitor->on_step(*job);
+  }
   job->finish();
   monitor->drain(job->board().T_b_c);
 }

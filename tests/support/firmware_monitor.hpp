@@ -1,6 +1,7 @@
 #pragma once
 // The firmware run in-process (RunJob) with its MAVLink link pointed at this test acting as the
 // monitor on UDP loopback: what a flight controller would receive, decoded.
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,10 @@ struct Monitor {
   std::vector<std::string> texts;
   std::vector<mavlink::ObstacleDistance> obstacles;
   mavlink::StatusTextJoiner joiner;
+  std::vector<mavlink::Odometry> odometry_messages;
+  // A test playing the autopilot: every frame received, and each step after the drain.
+  std::function<void(const mavlink::Frame&)> on_frame;
+  std::function<void(const RunJob&)> on_step;
   // Decodes what has arrived; poses in the camera frame (T_b_c: the board's mounting).
   void drain(const SE3& T_b_c);
 };

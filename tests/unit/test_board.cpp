@@ -145,6 +145,12 @@ TEST(Board, BadBoardsAreClearErrors) {
   expect_error(testing::with_changes(kMinimal, "sensor.usb_id = kinect\n"),
                "sensor.usb_id 'kinect'");
   expect_error(testing::with_changes(kMinimal, "sensor.depth = metric\n"), "sensor.depth 'metric'");
+  expect_error(testing::with_changes(kMinimal, "origin.latitude_deg = 47.4\n"),
+               "origin.latitude_deg and origin.longitude_deg go together");
+  expect_error(testing::with_changes(kMinimal, "origin.latitude_deg = 91\n"), "out of range");
+  expect_error(testing::with_changes(kMinimal, "origin.latitude_deg = nan\n"),
+               "origin.latitude_deg");
+  expect_error(testing::with_changes(kMinimal, "autopilot.attitude_sigma = 0\n"), "out of range");
 }
 
 TEST(Board, CapacityOverridesAreCheckedLikeParams) {

@@ -109,7 +109,8 @@ TEST(Mavlink, CrcExtraAndLengthsMatchTheXmlDefinitions) {
   const std::string xml = read_file(testing::source_path("tests/data/mavlink/messages.xml"));
   ASSERT_FALSE(xml.empty());
   for (const MessageSpec* s :
-       {&kHeartbeat, &kStatusText, &kOdometry, &kTimesync, &kObstacleDistance}) {
+       {&kHeartbeat, &kStatusText, &kOdometry, &kTimesync, &kObstacleDistance, &kAttitude,
+        &kAttitudeQuaternion, &kSetGpsGlobalOrigin}) {
     expect_spec_matches(xml, *s);
   }
 }
@@ -124,6 +125,9 @@ TEST(Mavlink, CrcExtraMatchesTheUpstreamFilesWhereThisMachineHasThem) {
   expect_spec_matches(common, kOdometry);
   expect_spec_matches(common, kTimesync);
   expect_spec_matches(common, kObstacleDistance);
+  expect_spec_matches(common, kAttitude);
+  expect_spec_matches(common, kAttitudeQuaternion);
+  expect_spec_matches(common, kSetGpsGlobalOrigin);
 }
 
 TEST(Mavlink, ObstacleDistanceRoundTripsInWireOrder) {
@@ -154,6 +158,44 @@ TEST(Mavlink, ObstacleDistanceRoundTripsInWireOrder) {
   EXPECT_EQ(got.max_distance, 500);
   EXPECT_FLOAT_EQ(got.increment_f, sent.increment_f);
   EXPECT_FLOAT_EQ(got.angle_offset, sent.angle_offset);
+}
+
+TEST(Mavlink, TheAutopilotsAttitudeAndTheOriginWeSendAreInWireOrder) {
+  AttitudeQuaternion a;
+  a.time_boot_ms = 123456;
+  a.q[0] = 0.5f;
+  a.q[1] = -0.5f;
+  a.q[2] = 0.5f;
+  a.q[3] = -0.5f;
+  a.yawspeed = 1.5f;
+  uint8_t payload[kMaxPayloadBytes];
+  ASSERT_EQ(pack(a, payload), kAttitudeQuaternion.payload_bytes);
+  float q4 = 0, yawspeed = 0;  // common.xml: time_boot_ms, q1..q4, rates, then repr_offset_q
+  std::memcpy(&q4, payload + 16, 4);
+  std::memcpy(&yawspeed, payload + 28, 4);
+  EXPECT_EQ(q4, -0.5f);
+  EXPECT_EQ(yawspeed, 1.5f);
+  AttitudeQuaternion got_a;
+  unpack(payload, 32, &got_a);  // sent without the extension, as older autopilots do
+  EXPECT_EQ(got_a.time_boot_ms, 123456u);
+  EXPECT_EQ(got_a.q[1], -0.5f);
+  EXPECT_EQ(got_a.repr_offset_q[0], 0.f);
+
+  SetGpsGlobalOrigin o;
+  o.latitude = 473977420;  // degE7
+  o.longitude = 85455940;
+  o.altitude = 488000;  // mm
+  o.target_system = 1;
+  o.time_usec = 42;
+  ASSERT_EQ(pack(o, payload), kSetGpsGlobalOrigin.payload_bytes);
+  int32_t latitude = 0;  // latitude, longitude, altitude, target_system, then time_usec
+  std::memcpy(&latitude, payload, 4);
+  EXPECT_EQ(latitude, 473977420);
+  EXPECT_EQ(payload[12], 1);
+  SetGpsGlobalOrigin got_o;
+  unpack(payload, kSetGpsGlobalOrigin.payload_bytes, &got_o);
+  EXPECT_EQ(got_o.altitude, 488000);
+  EXPECT_EQ(got_o.time_usec, 42u);
 }
 
 Odometry sample_odometry(uint64_t t_us) {

@@ -91,6 +91,7 @@ struct Received {
   int heartbeats = 0, status_texts = 0;
   std::vector<mavlink::StatusText> texts;
   std::vector<mavlink::Timesync> timesync;
+  std::vector<mavlink::SetGpsGlobalOrigin> origins;
   void take(const uint8_t* bytes, size_t n) {
     decoder.feed_all(bytes, n, [this](const mavlink::Frame& f) {
       if (f.message_id == mavlink::kOdometry.id) {
@@ -105,6 +106,9 @@ struct Received {
       } else if (f.message_id == mavlink::kTimesync.id) {
         timesync.emplace_back();
         mavlink::unpack(f.payload, f.length, &timesync.back());
+      } else if (f.message_id == mavlink::kSetGpsGlobalOrigin.id) {
+        origins.emplace_back();
+        mavlink::unpack(f.payload, f.length, &origins.back());
       }
     });
   }
@@ -252,6 +256,150 @@ TEST(PoseLink, TheLinkListensHeartbeatAndTimesync) {
   link.tick(6'100'000'000, mavlink::kMavStateActive);
   EXPECT_FALSE(peer.silent);
   EXPECT_EQ(peer.heartbeats, 2u);
+}
+
+// The autopilot heard and its clock measured, as TheLinkListensHeartbeatAndTimesync: our
+// time_usec clock is 100 s ahead of the link's, the autopilot's 2 s ahead of time_usec's.
+constexpr int64_t kSensorAhead = 100'000'000'000, kAutopilotAhead = 2'000'000'000;
+void start_clocks(PoseLink* link) {
+  link->set_time_base(1'000'000'000 + kSensorAhead, 1'000'000'000);
+}
+// The autopilot's heartbeat at now_ns, then its answer to our TIMESYNC request 2 ms after we
+// sent it.
+void hear_and_sync(AutopilotLink* wire, PoseLink* link, int64_t now_ns) {
+  wire->says(mavlink::Heartbeat{});
+  link->tick(now_ns, mavlink::kMavStateActive);
+  ASSERT_FALSE(wire->sent.timesync.empty());
+  mavlink::Timesync reply;
+  reply.ts1 = wire->sent.timesync.back().ts1;
+  reply.tc1 = reply.ts1 + 1'000'000 + kAutopilotAhead;
+  wire->says(reply);
+  link->tick(reply.ts1 - kSensorAhead + 2'000'000, mavlink::kMavStateActive);
+  ASSERT_EQ(link->peer().clock_offset_ns, kAutopilotAhead);
+}
+
+TEST(PoseLink, TheAutopilotsAttitudeReachesTheTrackerInTheSensorsClockAndItsOriginIsSent) {
+  AutopilotLink wire;
+  PoseLinkConfig config;
+  config.send_origin = true;
+  config.origin_latitude_e7 = 473977420;
+  config.origin_longitude_e7 = 85455940;
+  config.origin_altitude_mm = 488000;
+  PoseLink link;
+  link.init(config, &wire);
+  start_clocks(&link);
+  SpscRing<AttitudeSample> ring;
+  ring.allocate(4);
+  link.send_attitudes_to(&ring);
+  // Before its clock is known an attitude cannot be placed in time: counted, not passed on.
+  mavlink::AttitudeQuaternion early;
+  early.time_boot_ms = 1000;
+  wire.says(mavlink::Heartbeat{});
+  wire.says(early);
+  link.tick(1'500'000'000, mavlink::kMavStateActive);
+  EXPECT_EQ(link.counters().attitudes_unsynced, 1u);
+  EXPECT_EQ(ring.front(), nullptr);
+  ASSERT_EQ(wire.sent.origins.size(), 1u) << "once, when the autopilot is first heard";
+  EXPECT_EQ(wire.sent.origins[0].latitude, 473977420);
+  EXPECT_EQ(wire.sent.origins[0].altitude, 488000);
+  EXPECT_EQ(wire.sent.origins[0].target_system, 1);
+  hear_and_sync(&wire, &link, 1'600'000'000);
+
+  mavlink::AttitudeQuaternion a;
+  a.time_boot_ms = 104'000;  // the autopilot's 104 s is our sensor's 102 s
+  const Eigen::Quaterniond pitched(Eigen::AngleAxisd(0.2, Vector3d::UnitY()));
+  a.q[0] = static_cast<float>(pitched.w());
+  a.q[2] = static_cast<float>(pitched.y());
+  a.yawspeed = 1.0f;
+  wire.says(a);
+  mavlink::Attitude e;  // the same, as Euler angles, 10 ms later
+  e.time_boot_ms = 104'010;
+  e.pitch = 0.2f;
+  e.yawspeed = 1.0f;
+  wire.says(e);
+  link.tick(2'100'000'000, mavlink::kMavStateActive);
+  EXPECT_EQ(link.counters().attitudes, 2u);
+  for (int64_t t_ns : {102'000'000'000, 102'010'000'000}) {
+    const AttitudeSample* s = ring.front();
+    ASSERT_NE(s, nullptr);
+    EXPECT_EQ(s->t_ns, t_ns);
+    EXPECT_NEAR(angle_between(s->q_n_b, pitched), 0, 1e-6);
+    EXPECT_FLOAT_EQ(static_cast<float>(s->rate_b_rad_s.z()), 1.0f);
+    EXPECT_NEAR(s->timing_sigma_s, 0.5 * 0.002 + 0.0005, 1e-12) << "half the round trip, and ms";
+    ring.pop();
+  }
+  // A full queue drops and counts, never blocks.
+  for (int i = 0; i < 6; ++i) {
+    a.time_boot_ms = 105'000 + static_cast<uint32_t>(i) * 10;
+    wire.says(a);
+  }
+  link.tick(2'200'000'000, mavlink::kMavStateActive);
+  EXPECT_EQ(link.counters().attitudes_dropped, 2u);
+  // Back after a silence (it may have rebooted): told its origin again.
+  link.tick(6'000'000'000, mavlink::kMavStateActive);
+  ASSERT_TRUE(link.peer().silent);
+  wire.says(mavlink::Heartbeat{});
+  link.tick(6'100'000'000, mavlink::kMavStateActive);
+  EXPECT_EQ(wire.sent.origins.size(), 2u);
+  EXPECT_EQ(link.counters().origins_sent, 2u);
+}
+
+TEST(PoseLink, StampsInTheAutopilotsClockWaitForTimesync) {
+  AutopilotLink wire;
+  PoseLinkConfig config;
+  config.time_in_autopilot_clock = true;
+  PoseLink link;
+  link.init(config, &wire);
+  start_clocks(&link);
+  PoseEstimate p = pose_at(0, Vector3d::Zero());
+  p.timestamp_ns = 1'000'000'000 + kSensorAhead;
+  link.on_pose(p, 1'000'000'000);
+  EXPECT_EQ(link.counters().held_unsynced, 1u) << "no time_usec in a clock not yet known";
+  EXPECT_TRUE(wire.sent.odometry.empty());
+  hear_and_sync(&wire, &link, 2'000'000'000);
+  link.on_pose(p, 2'100'000'000);
+  ASSERT_EQ(wire.sent.odometry.size(), 1u);
+  EXPECT_EQ(wire.sent.odometry[0].time_usec,
+            static_cast<uint64_t>((p.timestamp_ns + kAutopilotAhead) / 1000));
+}
+
+TEST(PoseLink, ALevelFrameTurnsOdometryAndMovesTheResetCounterOn) {
+  PoseLinkConfig config;
+  config.T_b_c = body_from_camera();
+  PoseLink link;
+  link.init(config, nullptr);
+  // The body pitched up 0.2 rad at the world's origin: unlevelled, ODOMETRY says no turn.
+  const PoseEstimate p = pose_at(0, Vector3d::Zero());
+  const mavlink::Odometry before = link.odometry_of(p);
+  EXPECT_NEAR(before.q[0], 1.0, 1e-6);
+  const Eigen::Quaterniond pitched(Eigen::AngleAxisd(0.2, Vector3d::UnitY()));
+  link.set_level(level_from_world(pitched, config.T_b_c, p.T_w_c));
+  const mavlink::Odometry after = link.odometry_of(p);
+  EXPECT_NEAR(after.x, 0, 1e-6) << "the body at the world's origin stays at the frame's origin";
+  const Eigen::Quaterniond q(after.q[0], after.q[1], after.q[2], after.q[3]);
+  EXPECT_NEAR(angle_between(q, pitched), 0, 1e-6) << "the body's pitch, now seen";
+  EXPECT_EQ(after.reset_counter, before.reset_counter + 1) << "the frame changed under the EKF";
+  link.set_level(level_from_world(pitched, config.T_b_c, p.T_w_c));
+  EXPECT_EQ(link.odometry_of(p).reset_counter, after.reset_counter) << "the same frame again";
+}
+
+// The README's two mountings: a camera moved along its image's "up" is, looking down with the
+// image's top to the front, the body moving forward; looking forward, moving along its optical
+// axis is.
+TEST(PoseLink, TheReadmesMountingsPutTheBodysForwardWhereTheySay) {
+  const double h = std::sqrt(0.5);
+  for (const auto& [q_b_c, camera_forward] :
+       {std::make_pair(Eigen::Quaterniond(0.5, 0.5, 0.5, 0.5), Vector3d(0, 0, 1)),
+        std::make_pair(Eigen::Quaterniond(h, 0, 0, h), Vector3d(0, -1, 0))}) {
+    PoseLinkConfig config;
+    config.T_b_c = SE3(q_b_c, Vector3d::Zero());
+    PoseLink link;
+    link.init(config, nullptr);
+    const mavlink::Odometry o = link.odometry_of(pose_at(30, camera_forward));  // 1 m/s for 1 s
+    EXPECT_NEAR(o.x, 1.0, 1e-5);
+    EXPECT_NEAR(o.y, 0.0, 1e-5);
+    EXPECT_NEAR(o.z, 0.0, 1e-5);
+  }
 }
 
 // A pseudo-terminal pair: the link writes the slave as it would a UART; the test reads the

@@ -4,6 +4,8 @@
 // `key = value` schema machinery as params and validated at start-up. Boards are data: no code
 // in src/ knows a board by name.
 
+#include <cmath>
+
 #include "rgbdtam/core/se3.hpp"
 #include "rgbdtam/core/status.hpp"
 #include "rgbdtam/runtime/key_value.hpp"
@@ -45,6 +47,13 @@ struct Board {
   double obstacle_rate_hz = 10.0;
   double obstacle_lowest_m = -0.5, obstacle_highest_m = 0.5;  // the height band, up positive
   double obstacle_fov_deg = 0.0;                              // 0: the camera's
+  // The autopilot's attitude (ATTITUDE_QUATERNION or ATTITUDE): gravity levels ODOMETRY's
+  // frame, and the turn between frames is the tracker's first guess, checked by the image.
+  bool autopilot_attitude = true;
+  double autopilot_attitude_sigma_rad = 0.5 * M_PI / 180.0;  // its noise over one frame
+  bool link_time_in_autopilot_clock = false;  // time_usec in the autopilot's clock (TIMESYNC)
+  // A fixed geographic origin sent as SET_GPS_GLOBAL_ORIGIN (NaN: none).
+  double origin_latitude_deg = NAN, origin_longitude_deg = NAN, origin_altitude_m = 0.0;
 
   char gpio_chip[kTextBytes] = "";  // empty: no GPIO
   int gpio_led_line = -1;           // status LED, -1 = none

@@ -12,6 +12,7 @@
 #include <cstdint>
 
 #include "rgbdtam/core/obstacle_sectors.hpp"
+#include "rgbdtam/runtime/attitude_aid.hpp"
 #include "rgbdtam/runtime/board.hpp"
 #include "rgbdtam/runtime/latency_stats.hpp"
 #include "rgbdtam/runtime/link_task.hpp"
@@ -60,6 +61,7 @@ class FirmwareRuntime {
   const LatencyStats& tracker_time() const { return tracker_time_; }
   const SlamSystem& slam() const { return slam_; }
   const LinkTask& link() const { return link_; }
+  const AttitudeAid& attitude() const { return attitude_; }
   const StatusLed& led() const { return led_; }
 
  private:
@@ -76,6 +78,7 @@ class FirmwareRuntime {
   int64_t period_ns_ = 0;
   SlamSystem slam_;
   LinkTask link_;
+  AttitudeAid attitude_;  // the autopilot's attitude, on the tracker's thread
   StatusLed led_;
   LatencyStats tracker_time_;
   bool sensor_text_posted_ = false;  // this outage has been reported, at sensor_text_ns_

@@ -20,7 +20,17 @@ class LinkTask {
   void init(const PoseLinkConfig& config, ByteLink* link, int queue_slots, ClockFn clock);
   Status start(const ThreadPlacement& placement);
   // Tracker thread. False when the queue was full (the message is dropped and counted).
-  bool post_pose(const PoseEstimate& pose, int64_t arrival_ns);
+  // q_l_w: the level frame ODOMETRY is sent in, once known (null: not yet).
+  bool post_pose(const PoseEstimate& pose, int64_t arrival_ns,
+                 const Eigen::Quaterniond* q_l_w = nullptr);
+  // Tracker thread: the autopilot's attitudes received since the last call, oldest first.
+  template <typename OnSample>
+  void take_attitudes(OnSample&& on_sample) {
+    while (const AttitudeSample* s = attitudes_.front()) {
+      on_sample(*s);
+      attitudes_.pop();
+    }
+  }
   bool post_status(uint8_t severity, const char* text);
   // timestamp_ns: the depth frame's, in the sensor's clock (as the poses' stamps).
   bool post_obstacles(const ObstacleSectors& sectors, int64_t timestamp_ns);
@@ -52,6 +62,7 @@ class LinkTask {
   PoseLink link_;
   ByteLink* transport_ = nullptr;
   SpscRing<LinkMessage> queue_;
+  SpscRing<AttitudeSample> attitudes_;  // link thread -> tracker thread
   ClockFn clock_ = nullptr;
   LatencyStats per_message_;
   LatencyStats arrival_to_odometry_;

@@ -1,5 +1,5 @@
 #pragma once
-// MAVLink v2 framing and the three messages the pose link sends (definitions:
+// MAVLink v2 framing and the messages the pose link sends and reads (definitions:
 // common.xml / minimal.xml of the MAVLink project). Framing, the X.25 checksum and each
 // message's CRC_EXTRA are written here once; the runtime's link, the monitor and the tests all
 // use this code. No signing (incompat_flags = 0).
@@ -38,6 +38,9 @@ constexpr MessageSpec kStatusText{253, 54, 83, "STATUSTEXT"};
 constexpr MessageSpec kOdometry{331, 233, 91, "ODOMETRY"};
 constexpr MessageSpec kTimesync{111, 18, 34, "TIMESYNC"};
 constexpr MessageSpec kObstacleDistance{330, 167, 23, "OBSTACLE_DISTANCE"};
+constexpr MessageSpec kAttitude{30, 28, 39, "ATTITUDE"};  // received from the autopilot
+constexpr MessageSpec kAttitudeQuaternion{31, 48, 246, "ATTITUDE_QUATERNION"};  // received
+constexpr MessageSpec kSetGpsGlobalOrigin{48, 21, 41, "SET_GPS_GLOBAL_ORIGIN"};
 // The spec of a message id this link knows, or null.
 const MessageSpec* find_spec(uint32_t id);
 
@@ -113,10 +116,36 @@ struct ObstacleDistance {
   uint8_t frame = kMavFrameBodyFrd;
 };
 
+// The autopilot's attitude: body (front-right-down) in its local level frame (north-east-down),
+// stamped in its boot clock. ATTITUDE says the same in Euler angles.
+struct AttitudeQuaternion {
+  uint32_t time_boot_ms = 0;
+  float q[4] = {1, 0, 0, 0};                          // w, x, y, z (q1..q4 on the wire)
+  float rollspeed = 0, pitchspeed = 0, yawspeed = 0;  // rad/s, body axes
+  float repr_offset_q[4] = {};                        // display only; ignored
+};
+
+struct Attitude {
+  uint32_t time_boot_ms = 0;
+  float roll = 0, pitch = 0, yaw = 0;                 // rad
+  float rollspeed = 0, pitchspeed = 0, yawspeed = 0;  // rad/s
+};
+
+// Where the autopilot's local origin is on Earth, for flying without GPS.
+struct SetGpsGlobalOrigin {
+  int32_t latitude = 0, longitude = 0;  // degE7
+  int32_t altitude = 0;                 // mm above mean sea level
+  uint8_t target_system = 0;
+  uint64_t time_usec = 0;
+};
+
 // Payload (wire order) of each message; returns the full, untruncated length.
 int pack(const Heartbeat& m, uint8_t* payload);
 int pack(const StatusText& m, uint8_t* payload);
 int pack(const Timesync& m, uint8_t* payload);
+int pack(const Attitude& m, uint8_t* payload);
+int pack(const AttitudeQuaternion& m, uint8_t* payload);
+int pack(const SetGpsGlobalOrigin& m, uint8_t* payload);
 
 // Joins STATUSTEXT chunks back into whole texts, as a ground station does.
 class StatusTextJoiner {
@@ -137,6 +166,9 @@ void unpack(const uint8_t* payload, int length, StatusText* m);
 void unpack(const uint8_t* payload, int length, Timesync* m);
 void unpack(const uint8_t* payload, int length, Odometry* m);
 void unpack(const uint8_t* payload, int length, ObstacleDistance* m);
+void unpack(const uint8_t* payload, int length, Attitude* m);
+void unpack(const uint8_t* payload, int length, AttitudeQuaternion* m);
+void unpack(const uint8_t* payload, int length, SetGpsGlobalOrigin* m);
 
 // Frames messages from one system/component, with its own sequence counter.
 class Encoder {
@@ -158,6 +190,9 @@ class Encoder {
   static const MessageSpec& spec_of(const Odometry&) { return kOdometry; }
   static const MessageSpec& spec_of(const Timesync&) { return kTimesync; }
   static const MessageSpec& spec_of(const ObstacleDistance&) { return kObstacleDistance; }
+  static const MessageSpec& spec_of(const Attitude&) { return kAttitude; }
+  static const MessageSpec& spec_of(const AttitudeQuaternion&) { return kAttitudeQuaternion; }
+  static const MessageSpec& spec_of(const SetGpsGlobalOrigin&) { return kSetGpsGlobalOrigin; }
   uint8_t system_id_, component_id_;
   uint8_t sequence_ = 0;
 };

@@ -126,6 +126,8 @@ struct LinkMessage {
   Kind kind = Kind::kPose;
   PoseEstimate pose;
   int64_t arrival_ns = 0;  // when the pose's frame arrived, on the link's clock
+  bool levelled = false;   // q_l_w holds the level frame (gravity from the autopilot)
+  Eigen::Quaterniond q_l_w = Eigen::Quaterniond::Identity();
   ObstacleSectors obstacles;
   int64_t obstacles_timestamp_ns = 0;  // their depth frame's, in the sensor's clock
   uint8_t severity = 0;

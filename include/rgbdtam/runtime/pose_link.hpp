@@ -14,10 +14,12 @@
 
 #include <cstdint>
 
+#include "rgbdtam/core/attitude.hpp"
 #include "rgbdtam/core/se3.hpp"
 #include "rgbdtam/runtime/byte_link.hpp"
 #include "rgbdtam/runtime/mavlink.hpp"
 #include "rgbdtam/runtime/messages.hpp"
+#include "rgbdtam/runtime/spsc_ring.hpp"
 
 namespace rgbdtam {
 
@@ -29,6 +31,12 @@ struct PoseLinkConfig {
   uint8_t child_frame_id = mavlink::kMavFrameBodyFrd;
   int64_t heartbeat_period_ns = 1000000000;
   int64_t burst_ns = 100000000;  // the token bucket holds this much line time
+  // Stamp ODOMETRY and OBSTACLE_DISTANCE in the autopilot's clock (capture time moved by the
+  // TIMESYNC offset); until TIMESYNC has an answer they are held back, not sent in another clock.
+  bool time_in_autopilot_clock = false;
+  // Sent as SET_GPS_GLOBAL_ORIGIN each time the autopilot is heard (again), when set.
+  bool send_origin = false;
+  int32_t origin_latitude_e7 = 0, origin_longitude_e7 = 0, origin_altitude_mm = 0;
 };
 
 struct PoseLinkCounters {
@@ -40,6 +48,12 @@ struct PoseLinkCounters {
   uint64_t obstacles_sent = 0;  // OBSTACLE_DISTANCE, skipped and refused as ODOMETRY is
   uint64_t obstacles_rate_limited = 0;
   uint64_t obstacles_refused = 0;
+  uint64_t held_unsynced = 0;  // not sent: time_in_autopilot_clock before TIMESYNC answered
+  uint64_t origins_sent = 0;
+  uint64_t attitudes = 0;           // ATTITUDE(_QUATERNION) from the autopilot handed on
+  uint64_t attitudes_unsynced = 0;  // ... not: its clock not yet known
+  uint64_t attitudes_dropped = 0;   // ... not: the tracker's queue was full
+  uint32_t frame_changes = 0;       // level frame found or changed: reset_counter moved on
 };
 
 // What the link has heard from the other MAVLink system on it (the autopilot).
@@ -51,6 +65,7 @@ struct PeerState {
   bool silent = false;             // no HEARTBEAT for PoseLink::kPeerSilentNs
   uint32_t silences = 0;           // times it went silent
   uint32_t timesync_answered = 0;  // its TIMESYNC requests we answered
+  uint32_t timesync_requests = 0;  // ours to it
   uint32_t timesync_replies = 0;   // its answers to ours
   // Its clock minus the clock of our ODOMETRY time_usec, ns, from round trips no longer than
   // twice the shortest seen; valid once timesync_replies > 0.
@@ -91,9 +106,19 @@ class PoseLink {
 
   // The ODOMETRY a pose becomes (exposed for tests).
   mavlink::Odometry odometry_of(const PoseEstimate& pose);
+  // The level frame (gravity down) from the world, which ODOMETRY's frame becomes; until then it
+  // is the body at the world's origin. A change after poses went out in the old frame is a
+  // reset (reset_counter moves on).
+  void set_level(const Eigen::Quaterniond& q_l_w);
+  // Init time: the autopilot's attitudes go here, in the sensor's clock, for the tracker.
+  void send_attitudes_to(SpscRing<AttitudeSample>* ring) { attitudes_ = ring; }
 
  private:
   bool spend(int n, int64_t now_ns, bool must, int keep = 0);
+  // time_usec for a stamp in the sensor's clock; false when it cannot be given yet.
+  bool stamp_usec(int64_t sensor_ns, uint64_t* usec) const;
+  SE3 T_l_w() const;  // the ODOMETRY frame from the world
+  void on_attitude(const mavlink::AttitudeQuaternion& a);
   void listen(int64_t now_ns);
   void on_frame(const mavlink::Frame& f, int64_t now_ns);
   // A message that must go out (status, heartbeat, TIMESYNC): spent past the rate policy.
@@ -115,6 +140,7 @@ class PoseLink {
   int64_t timesync_sent_ns_ = -1;  // now_ns of our pending request
   int64_t timesync_sent_ts1_ = 0;  // its ts1, in the sensor's clock
   int64_t last_heartbeat_ns_ = -1;
+  int64_t last_timesync_ns_ = -1;  // our last request
   double tokens_ = 0;
   int64_t tokens_at_ns_ = -1;
   // The previous valid body pose, for velocities.
@@ -122,6 +148,10 @@ class PoseLink {
   SE3 T_l_b_previous_;
   int64_t previous_ns_ = 0;
   uint32_t previous_reset_ = 0;
+  bool levelled_ = false;
+  Eigen::Quaterniond q_l_w_ = Eigen::Quaterniond::Identity();
+  bool valid_sent_in_frame_ = false;  // a valid ODOMETRY went out in the current frame
+  SpscRing<AttitudeSample>* attitudes_ = nullptr;
   PoseLinkCounters counters_;
 };
 

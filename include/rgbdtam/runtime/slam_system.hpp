@@ -47,6 +47,8 @@ class SlamSystem {
   // track() then map_pending().
   PoseEstimate process(const SensorFrame& frame);
   PoseEstimate track(const SensorFrame& frame) { return tracking_.process(frame); }
+  // The next frame's turn as another sensor saw it (TrackingPipeline::set_rotation_prior).
+  void set_rotation_prior(const RotationPrior& prior) { tracking_.set_rotation_prior(prior); }
   // After the pose is out: the keyframe the frame asked for (if it did not, nothing) ...
   void build_pending_keyframe() { tracking_.build_pending_keyframe(); }
   // ... then, synchronous mode: the mapper's and loop module's steps for what the tracker

@@ -4,6 +4,7 @@
 // process() never allocates.
 // Thread: the caller's (replay: main thread; runtime: the tracking task).
 
+#include "rgbdtam/core/attitude.hpp"
 #include "rgbdtam/runtime/keyframe_pool.hpp"
 #include "rgbdtam/runtime/loop_closing.hpp"
 #include "rgbdtam/runtime/mapping.hpp"
@@ -34,6 +35,8 @@ struct TrackingCounters {
   uint32_t loop_corrections = 0;             // loop closures adopted
   uint32_t withheld = 0;                     // tracked frames not reported valid after a correction
   uint32_t loop_dropped_keyframes = 0;  // the loop queue was full: not remembered (or a reuse lost)
+  uint32_t prior_used = 0;      // frames whose first guess turned by the autopilot's attitude stood
+  uint32_t prior_rejected = 0;  // ... did not (the image disagreed): tracked without it
 };
 
 class TrackingPipeline {
@@ -41,6 +44,10 @@ class TrackingPipeline {
   // keyframes: the dense keyframe store, allocated here, shared with the mapper.
   Status init(const Params& params, KeyframePool* keyframes);
   PoseEstimate process(const SensorFrame& frame);
+  // For the next process() only: the camera's turn since the last tracked frame, as another
+  // sensor saw it (from last_tracked_ns() to the frame's stamp; otherwise ignored).
+  void set_rotation_prior(const RotationPrior& prior) { prior_ = prior; }
+  int64_t last_tracked_ns() const { return has_last_ ? last_ns_ : -1; }
   // The keyframe a frame asked for is built after its pose is out: here, or at the next
   // process() at the latest. Until then the previous keyframe stays the reference.
   void build_pending_keyframe();
@@ -80,6 +87,10 @@ class TrackingPipeline {
   };
   FramePyramid& frame() { return frames_[current_]; }
   Attempt track_against(Keyframe* kf, const SE3& T_w_guess, int64_t t_ns);
+  // From the prediction, turned by the rotation prior where there is one and the image agrees.
+  Attempt track_first(int64_t t_ns);
+  bool prior_applies(int64_t t_ns) const;
+  SE3 turned_by_prior(const SE3& predicted) const;
   // The wider basin: several initial guesses screened at the coarsest level.
   Attempt track_from_guesses(Keyframe* kf, int64_t t_ns);
   Attempt without_misfit_term(const Attempt& a, int64_t t_ns);
@@ -146,6 +157,7 @@ class TrackingPipeline {
   // The last valid pose and the camera's twist (v, omega per second) before it.
   SE3 T_w_last_;
   int64_t last_ns_ = 0;
+  RotationPrior prior_;  // this frame's, if any
   Vector6d velocity_ = Vector6d::Zero();
   bool has_last_ = false;
   bool previous_valid_ = false;  // the frame before this one was valid
