@@ -316,7 +316,7 @@ void print_peer(const PeerState& p) {
       p.silences, p.silent ? " (silent at the end)" : "");
   std::printf("timesync: %u of its requests answered; %u answers to ours", p.timesync_answered,
               p.timesync_replies);
-  if (p.timesync_replies > 0) {
+  if (p.clock_known) {
     std::printf(", its clock %+.3f ms from our time_usec, best round trip %.3f ms",
                 static_cast<double>(p.clock_offset_ns) * 1e-6,
                 static_cast<double>(p.best_round_trip_ns) * 1e-6);

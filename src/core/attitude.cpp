@@ -80,14 +80,37 @@ RotationPrior rotation_prior(const AttitudeHistory& history, const SE3& T_b_c, i
   return prior;
 }
 
-Eigen::Quaterniond level_from_world(const Eigen::Quaterniond& q_n_b, const SE3& T_b_c,
-                                    const SE3& T_w_c) {
+Vector3d down_in_world(const Eigen::Quaterniond& q_n_b, const SE3& T_b_c, const SE3& T_w_c) {
   const Eigen::Quaterniond q_n_w = q_n_b * T_b_c.quaternion() * T_w_c.quaternion().conjugate();
+  return (q_n_w.conjugate() * Vector3d::UnitZ()).normalized();
+}
+
+Eigen::Quaterniond level_from_world(const Vector3d& down_w, const SE3& T_b_c) {
   // The body at the world's origin is the camera there turned by the mounting: R_w_b0 = R_c_b.
-  const Vector3d forward_n = (q_n_w * T_b_c.quaternion().conjugate()) * Vector3d::UnitX();
-  const double heading = std::atan2(forward_n.y(), forward_n.x());
-  const Eigen::Quaterniond q_l_n(Eigen::AngleAxisd(-heading, Vector3d::UnitZ()));
-  return (q_l_n * q_n_w).normalized();
+  const Vector3d forward_w = T_b_c.quaternion().conjugate() * Vector3d::UnitX();
+  const Vector3d z = down_w.normalized();
+  const Vector3d x = (forward_w - forward_w.dot(z) * z).normalized();
+  Matrix3d R_w_l;
+  R_w_l << x, z.cross(x), z;
+  return Eigen::Quaterniond(R_w_l.transpose()).normalized();
+}
+
+void GravityEstimate::add(const Vector3d& down_w) {
+  last_[next_] = down_w;
+  next_ = (next_ + 1) % kFrames;
+  size_ = std::min(size_ + 1, kFrames);
+}
+
+bool GravityEstimate::agreed(Vector3d* down_w) const {
+  if (size_ < kFrames) return false;
+  Vector3d mean = Vector3d::Zero();
+  for (const Vector3d& d : last_) mean += d;
+  mean.normalize();
+  for (const Vector3d& d : last_) {
+    if (std::acos(std::min(1.0, d.dot(mean))) > kAgreeRad) return false;
+  }
+  *down_w = mean;
+  return true;
 }
 
 double angle_between(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b) {

@@ -23,10 +23,22 @@ void PoseLink::init(const PoseLinkConfig& config, ByteLink* link) {
   encoder_ = mavlink::Encoder(config.system_id, config.component_id);
 }
 
+void PoseLink::set_time_base(int64_t sensor_ns, int64_t arrival_ns) {
+  constexpr int64_t kClockJumpNs = 1'000'000'000;
+  const int64_t base = sensor_ns - arrival_ns;
+  if (time_base_set_ && std::llabs(base - sensor_minus_now_ns_) > kClockJumpNs) {
+    peer_.clock_known = false;
+    peer_.best_round_trip_ns = -1;
+    timesync_sent_ns_ = -1;
+  }
+  sensor_minus_now_ns_ = base;
+  time_base_set_ = true;
+}
+
 bool PoseLink::stamp_usec(int64_t sensor_ns, uint64_t* usec) const {
   int64_t t_ns = sensor_ns;
   if (config_.time_in_autopilot_clock) {
-    if (peer_.timesync_replies == 0) return false;
+    if (!peer_.clock_known) return false;
     t_ns += peer_.clock_offset_ns;
   }
   *usec = static_cast<uint64_t>(std::max<int64_t>(0, t_ns / 1000));
@@ -264,7 +276,7 @@ void PoseLink::on_frame(const mavlink::Frame& f, int64_t now_ns) {
     a.pitchspeed = e.pitchspeed;
     a.yawspeed = e.yawspeed;
     on_attitude(a);
-  } else if (f.message_id == mavlink::kTimesync.id) {
+  } else if (f.message_id == mavlink::kTimesync.id && time_base_set_) {
     mavlink::Timesync t;
     mavlink::unpack(f.payload, f.length, &t);
     const int64_t sensor_now = now_ns + sensor_minus_now_ns_;
@@ -284,9 +296,10 @@ void PoseLink::on_frame(const mavlink::Frame& f, int64_t now_ns) {
       }
       if (round_trip > 2 * peer_.best_round_trip_ns) return;  // delayed: its offset is not
       const int64_t offset = t.tc1 - (t.ts1 + round_trip / 2);
-      peer_.clock_offset_ns = peer_.timesync_replies == 0
+      peer_.clock_offset_ns = !peer_.clock_known
                                   ? offset
                                   : peer_.clock_offset_ns + (offset - peer_.clock_offset_ns) / 5;
+      peer_.clock_known = true;
       ++peer_.timesync_replies;
     }
   }
@@ -294,7 +307,7 @@ void PoseLink::on_frame(const mavlink::Frame& f, int64_t now_ns) {
 
 void PoseLink::on_attitude(const mavlink::AttitudeQuaternion& a) {
   if (attitudes_ == nullptr) return;
-  if (peer_.timesync_replies == 0) {
+  if (!peer_.clock_known) {
     ++counters_.attitudes_unsynced;
     return;
   }
@@ -340,9 +353,9 @@ void PoseLink::tick(int64_t now_ns, uint8_t system_status) {
   // 100 ms for its first ten until it answers (its attitudes, and stamps in its clock, wait for
   // that; one that never answers is not flooded).
   constexpr uint32_t kQuickRequests = 10;
-  const bool quick = peer_.timesync_replies == 0 && peer_.timesync_requests < kQuickRequests;
+  const bool quick = !peer_.clock_known && peer_.timesync_requests < kQuickRequests;
   const int64_t timesync_period_ns = quick ? 100'000'000 : 1'000'000'000;
-  if (peer_.heard && !peer_.silent &&
+  if (peer_.heard && !peer_.silent && time_base_set_ &&
       (last_timesync_ns_ < 0 || now_ns - last_timesync_ns_ >= timesync_period_ns)) {
     last_timesync_ns_ = now_ns;
     mavlink::Timesync request;

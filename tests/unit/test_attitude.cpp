@@ -87,7 +87,7 @@ TEST(Attitude, TheLevelFrameHasGravityDownAndTheFirstBodysHeading) {
   for (const auto& [q_n_b, T_w_c] :
        {std::make_pair(q_n_b0, SE3()),
         std::make_pair(Eigen::Quaterniond(q_n_b0 * q_b0_b1), T_w_c1)}) {
-    const Eigen::Quaterniond q_l_w = level_from_world(q_n_b, T_b_c, T_w_c);
+    const Eigen::Quaterniond q_l_w = level_from_world(down_in_world(q_n_b, T_b_c, T_w_c), T_b_c);
     // The level frame's down is the autopilot's down ...
     const Eigen::Quaterniond q_n_w = q_n_b * T_b_c.quaternion() * T_w_c.quaternion().conjugate();
     const Vector3d down_w = q_n_w.conjugate() * Vector3d::UnitZ();
@@ -98,6 +98,25 @@ TEST(Attitude, TheLevelFrameHasGravityDownAndTheFirstBodysHeading) {
     EXPECT_GT(front_l.x(), 0.9);
     EXPECT_NEAR(std::atan2(-front_l.z(), front_l.x()), 10 * kDeg, 1e-9) << "pitched up 10";
   }
+}
+
+TEST(Attitude, GravityStandsWhenTenFramesAgreeAndNotWhenTheyDrift) {
+  GravityEstimate g;
+  Vector3d down;
+  const Vector3d truth = Vector3d(0.1, 0.98, -0.05).normalized();
+  for (int i = 0; i < GravityEstimate::kFrames; ++i) {
+    EXPECT_FALSE(g.agreed(&down)) << "not before ten";
+    // 0.3 degrees of noise about alternating axes.
+    g.add(so3_exp(Vector3d::Unit(i % 3) * (i % 2 ? 0.3 : -0.3) * kDeg) * truth);
+  }
+  ASSERT_TRUE(g.agreed(&down));
+  EXPECT_LT(std::acos(std::min(1.0, down.dot(truth))), 0.2 * kDeg) << "their mean";
+  // A timing error on a turning body: each frame's estimate tilted a little more.
+  GravityEstimate drifting;
+  for (int i = 0; i < GravityEstimate::kFrames; ++i) {
+    drifting.add(so3_exp(Vector3d::UnitX() * (0.4 * i * kDeg)) * truth);
+  }
+  EXPECT_FALSE(drifting.agreed(&down)) << "3.6 degrees from first to last";
 }
 
 }  // namespace

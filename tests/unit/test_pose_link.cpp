@@ -373,13 +373,13 @@ TEST(PoseLink, ALevelFrameTurnsOdometryAndMovesTheResetCounterOn) {
   const mavlink::Odometry before = link.odometry_of(p);
   EXPECT_NEAR(before.q[0], 1.0, 1e-6);
   const Eigen::Quaterniond pitched(Eigen::AngleAxisd(0.2, Vector3d::UnitY()));
-  link.set_level(level_from_world(pitched, config.T_b_c, p.T_w_c));
+  link.set_level(level_from_world(down_in_world(pitched, config.T_b_c, p.T_w_c), config.T_b_c));
   const mavlink::Odometry after = link.odometry_of(p);
   EXPECT_NEAR(after.x, 0, 1e-6) << "the body at the world's origin stays at the frame's origin";
   const Eigen::Quaterniond q(after.q[0], after.q[1], after.q[2], after.q[3]);
   EXPECT_NEAR(angle_between(q, pitched), 0, 1e-6) << "the body's pitch, now seen";
   EXPECT_EQ(after.reset_counter, before.reset_counter + 1) << "the frame changed under the EKF";
-  link.set_level(level_from_world(pitched, config.T_b_c, p.T_w_c));
+  link.set_level(level_from_world(down_in_world(pitched, config.T_b_c, p.T_w_c), config.T_b_c));
   EXPECT_EQ(link.odometry_of(p).reset_counter, after.reset_counter) << "the same frame again";
 }
 
@@ -400,6 +400,29 @@ TEST(PoseLink, TheReadmesMountingsPutTheBodysForwardWhereTheySay) {
     EXPECT_NEAR(o.y, 0.0, 1e-5);
     EXPECT_NEAR(o.z, 0.0, 1e-5);
   }
+}
+
+// Before the first frame the link has no sensor clock to speak in: it neither asks nor answers
+// TIMESYNC (a measurement begun then would mix two clocks). A sensor reopened in another clock
+// makes the autopilot's clock unknown until it is measured again.
+TEST(PoseLink, TimesyncWaitsForTheFirstFrameAndStartsAgainWhenTheSensorsClockJumps) {
+  AutopilotLink wire;
+  PoseLink link;
+  link.init(PoseLinkConfig{}, &wire);
+  wire.says(mavlink::Heartbeat{});
+  mavlink::Timesync request;
+  request.ts1 = 777;
+  wire.says(request);
+  link.tick(1'000'000'000, mavlink::kMavStateStandby);
+  EXPECT_TRUE(link.peer().heard);
+  EXPECT_TRUE(wire.sent.timesync.empty()) << "no request and no answer without a sensor clock";
+  start_clocks(&link);
+  hear_and_sync(&wire, &link, 1'200'000'000);
+  EXPECT_TRUE(link.peer().clock_known);
+  link.set_time_base(5'000'000'000, 1'300'000'000);  // the sensor's clock restarted
+  EXPECT_FALSE(link.peer().clock_known);
+  link.set_time_base(5'000'000'100, 1'300'000'000);  // a frame's arrival jitter is no jump
+  EXPECT_FALSE(link.peer().clock_known);
 }
 
 // A pseudo-terminal pair: the link writes the slave as it would a UART; the test reads the

@@ -58,10 +58,29 @@ struct RotationPrior {
 RotationPrior rotation_prior(const AttitudeHistory& history, const SE3& T_b_c, int64_t from_ns,
                              int64_t to_ns, double attitude_sigma_rad, double timing_sigma_s);
 
-// The level frame from the world, given the body's attitude at the instant the camera was at
-// T_w_c: gravity from the attitude, heading from the world (the body at w's origin faces +x).
-Eigen::Quaterniond level_from_world(const Eigen::Quaterniond& q_n_b, const SE3& T_b_c,
-                                    const SE3& T_w_c);
+// Gravity's direction (down, unit) in the world, from the body's attitude at the instant the
+// camera was at T_w_c.
+Vector3d down_in_world(const Eigen::Quaterniond& q_n_b, const SE3& T_b_c, const SE3& T_w_c);
+
+// The level frame from the world: its z along down_w, its x the forward direction of the body
+// at the world's origin, on the horizontal (that body's front is not vertical).
+Eigen::Quaterniond level_from_world(const Vector3d& down_w, const SE3& T_b_c);
+
+// Gravity seen over several frames: it stands once the last kFrames estimates agree within
+// kAgreeRad of their mean, which a timing error on a turning body does not give.
+class GravityEstimate {
+ public:
+  static constexpr int kFrames = 10;
+  static constexpr double kAgreeRad = 1.0 * 3.14159265358979 / 180.0;
+  void add(const Vector3d& down_w);
+  void clear() { size_ = 0; }
+  // The mean of the last kFrames estimates when they agree.
+  bool agreed(Vector3d* down_w) const;
+
+ private:
+  Vector3d last_[kFrames];
+  int next_ = 0, size_ = 0;
+};
 
 // The angle between two rotations (rad).
 double angle_between(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b);

@@ -25,8 +25,9 @@ class AttitudeAid {
   void add(const AttitudeSample& s);
   // The camera's turn from from_ns to to_ns, invalid where the samples do not cover both.
   RotationPrior prior(int64_t from_ns, int64_t to_ns);
-  // After a pose: the first valid pose of each segment (reset_counter) with an attitude at its
-  // instant fixes that segment's level frame.
+  // After a pose: valid poses with an attitude at their instant estimate gravity in the world;
+  // once the last ten agree (GravityEstimate), their mean fixes the level frame of that segment
+  // (reset_counter).
   void on_pose(const PoseEstimate& pose);
   bool levelled() const { return levelled_; }
   const Eigen::Quaterniond& q_l_w() const { return q_l_w_; }
@@ -37,6 +38,8 @@ class AttitudeAid {
   double attitude_sigma_rad_ = 0;
   double timing_sigma_s_ = 0;  // the newest sample's
   AttitudeHistory history_;
+  GravityEstimate gravity_;
+  uint32_t gravity_reset_ = 0;  // the segment gravity_ is of
   bool levelled_ = false;
   uint32_t levelled_reset_ = 0;
   Eigen::Quaterniond q_l_w_ = Eigen::Quaterniond::Identity();

@@ -68,7 +68,8 @@ struct PeerState {
   uint32_t timesync_requests = 0;  // ours to it
   uint32_t timesync_replies = 0;   // its answers to ours
   // Its clock minus the clock of our ODOMETRY time_usec, ns, from round trips no longer than
-  // twice the shortest seen; valid once timesync_replies > 0.
+  // twice the shortest seen; valid once an answer was taken (again after our clock jumped).
+  bool clock_known = false;
   int64_t clock_offset_ns = 0;
   int64_t best_round_trip_ns = -1;
   uint64_t frames = 0;  // good frames received
@@ -96,10 +97,10 @@ class PoseLink {
   // call at least every frame period.
   void tick(int64_t now_ns, uint8_t system_status);
   // Relates the clock of ODOMETRY time_usec (the sensor's stamps) to now_ns's: a frame stamped
-  // sensor_ns arrived at arrival_ns. TIMESYNC is answered in the sensor's clock.
-  void set_time_base(int64_t sensor_ns, int64_t arrival_ns) {
-    sensor_minus_now_ns_ = sensor_ns - arrival_ns;
-  }
+  // sensor_ns arrived at arrival_ns. TIMESYNC is answered and asked in the sensor's clock, so
+  // not before the first frame; a jump of that clock (a sensor reopened) measures the
+  // autopilot's clock afresh.
+  void set_time_base(int64_t sensor_ns, int64_t arrival_ns);
   const PoseLinkCounters& counters() const { return counters_; }
   const PeerState& peer() const { return peer_; }
   static constexpr int64_t kPeerSilentNs = 3'000'000'000;  // three missed 1 Hz heartbeats
@@ -137,6 +138,7 @@ class PoseLink {
   mavlink::Decoder decoder_;
   PeerState peer_;
   int64_t sensor_minus_now_ns_ = 0;
+  bool time_base_set_ = false;
   int64_t timesync_sent_ns_ = -1;  // now_ns of our pending request
   int64_t timesync_sent_ts1_ = 0;  // its ts1, in the sensor's clock
   int64_t last_heartbeat_ns_ = -1;
