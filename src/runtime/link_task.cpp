@@ -19,8 +19,7 @@ void LinkTask::init(const PoseLinkConfig& config, ByteLink* link, int queue_slot
 Status LinkTask::start(const ThreadPlacement& placement) {
   // Ticks every 10 ms even without traffic: the heartbeat's 1 Hz, and the autopilot's attitude
   // (50-100 Hz) reaching the tracker before the next frame rather than after it.
-  return worker_.start(&queue_, &sender_, placement, "rgbdtam-link",
-                       std::chrono::milliseconds(10));
+  return worker_.start(&queue_, &sender_, placement, "rgbdtam-link", std::chrono::milliseconds(10));
 }
 
 bool LinkTask::post(const LinkMessage& m) {
@@ -90,7 +89,16 @@ void LinkTask::Sender::step(const LinkMessage& m) {
 }
 
 void LinkTask::Sender::tick() {
-  task->link_.tick(task->clock_(), task->system_status_.load(std::memory_order_relaxed));
+  const int64_t now = task->clock_();
+  task->link_.tick(now, task->system_status_.load(std::memory_order_relaxed));
+  // Once a second, the latency so far, for a ground station or the monitor to show.
+  const LatencyStats& latency = task->arrival_to_odometry_;
+  if (latency.count() > 0 && now - task->latency_reported_ns_ >= 1'000'000'000) {
+    task->latency_reported_ns_ = now;
+    task->link_.on_latency(static_cast<float>(latency.percentile_ms(0.5)),
+                           static_cast<float>(latency.percentile_ms(0.95)),
+                           static_cast<float>(latency.max_ms()), now);
+  }
 }
 
 void LinkTask::Sender::finish() {

@@ -67,8 +67,8 @@ uint16_t crc_accumulate(const uint8_t* bytes, size_t n, uint16_t crc) {
 
 const MessageSpec* find_spec(uint32_t id) {
   static constexpr const MessageSpec* kKnown[] = {
-      &kHeartbeat,        &kStatusText, &kOdometry,           &kTimesync,
-      &kObstacleDistance, &kAttitude,   &kAttitudeQuaternion, &kSetGpsGlobalOrigin};
+      &kHeartbeat, &kStatusText,         &kOdometry,           &kTimesync,       &kObstacleDistance,
+      &kAttitude,  &kAttitudeQuaternion, &kSetGpsGlobalOrigin, &kNamedValueFloat};
   for (const MessageSpec* s : kKnown) {
     if (s->id == id) return s;
   }
@@ -204,6 +204,17 @@ struct Fields<SetGpsGlobalOrigin> {
   }
 };
 
+template <>
+struct Fields<NamedValueFloat> {
+  static constexpr const MessageSpec& kSpec = kNamedValueFloat;
+  template <typename M, typename F>
+  static void each(M& m, F&& f) {
+    f(m.time_boot_ms);
+    f(m.value);
+    f(m.name);
+  }
+};
+
 template <typename M>
 int pack_fields(const M& m, uint8_t* payload) {
   Writer w(payload);
@@ -227,6 +238,7 @@ int pack(const ObstacleDistance& m, uint8_t* payload) { return pack_fields(m, pa
 int pack(const Attitude& m, uint8_t* payload) { return pack_fields(m, payload); }
 int pack(const AttitudeQuaternion& m, uint8_t* payload) { return pack_fields(m, payload); }
 int pack(const SetGpsGlobalOrigin& m, uint8_t* payload) { return pack_fields(m, payload); }
+int pack(const NamedValueFloat& m, uint8_t* payload) { return pack_fields(m, payload); }
 
 void unpack(const uint8_t* p, int length, Heartbeat* m) { unpack_fields(p, length, m); }
 void unpack(const uint8_t* p, int length, StatusText* m) { unpack_fields(p, length, m); }
@@ -236,6 +248,7 @@ void unpack(const uint8_t* p, int length, ObstacleDistance* m) { unpack_fields(p
 void unpack(const uint8_t* p, int length, Attitude* m) { unpack_fields(p, length, m); }
 void unpack(const uint8_t* p, int length, AttitudeQuaternion* m) { unpack_fields(p, length, m); }
 void unpack(const uint8_t* p, int length, SetGpsGlobalOrigin* m) { unpack_fields(p, length, m); }
+void unpack(const uint8_t* p, int length, NamedValueFloat* m) { unpack_fields(p, length, m); }
 
 const char* StatusTextJoiner::add(const StatusText& m) {
   if (m.id == 0 || m.chunk_seq == 0) used_ = 0;

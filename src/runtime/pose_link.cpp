@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <utility>
 
 namespace rgbdtam {
 
@@ -197,6 +198,20 @@ bool PoseLink::send_now(const Message& m, int64_t now_ns) {
   const int n = encoder_.encode(m, frame);
   (void)spend(n, now_ns, true);
   return link_->send(frame, static_cast<size_t>(n));
+}
+
+void PoseLink::on_latency(float median_ms, float p95_ms, float max_ms, int64_t now_ns) {
+  const std::pair<const char*, float> values[] = {
+      {"lat_med_ms", median_ms}, {"lat_p95_ms", p95_ms}, {"lat_max_ms", max_ms}};
+  for (const auto& [name, value] : values) {
+    mavlink::NamedValueFloat m;
+    m.time_boot_ms = static_cast<uint32_t>(now_ns / 1'000'000);
+    m.value = value;
+    // Ten characters fill the field without a NUL, as MAVLink allows.
+    std::memcpy(m.name, name, std::min(sizeof(m.name), std::strlen(name)));
+    (void)send_now(m, now_ns);
+  }
+  ++counters_.latency_reports;
 }
 
 void PoseLink::on_status(uint8_t severity, const char* text, int64_t now_ns) {

@@ -22,11 +22,13 @@ void check_round_trip(const Frame& f) {
   Attitude attitude;
   AttitudeQuaternion attitude_q;
   SetGpsGlobalOrigin origin;
+  NamedValueFloat value;
   if (spec == &kTimesync) unpack(f.payload, f.length, &ts);
   if (spec == &kObstacleDistance) unpack(f.payload, f.length, &obstacles);
   if (spec == &kAttitude) unpack(f.payload, f.length, &attitude);
   if (spec == &kAttitudeQuaternion) unpack(f.payload, f.length, &attitude_q);
   if (spec == &kSetGpsGlobalOrigin) unpack(f.payload, f.length, &origin);
+  if (spec == &kNamedValueFloat) unpack(f.payload, f.length, &value);
   if (spec == &kHeartbeat) unpack(f.payload, f.length, &hb);
   if (spec == &kStatusText) unpack(f.payload, f.length, &st);
   if (spec == &kOdometry) unpack(f.payload, f.length, &od);

@@ -110,7 +110,7 @@ TEST(Mavlink, CrcExtraAndLengthsMatchTheXmlDefinitions) {
   ASSERT_FALSE(xml.empty());
   for (const MessageSpec* s :
        {&kHeartbeat, &kStatusText, &kOdometry, &kTimesync, &kObstacleDistance, &kAttitude,
-        &kAttitudeQuaternion, &kSetGpsGlobalOrigin}) {
+        &kAttitudeQuaternion, &kSetGpsGlobalOrigin, &kNamedValueFloat}) {
     expect_spec_matches(xml, *s);
   }
 }
@@ -128,6 +128,7 @@ TEST(Mavlink, CrcExtraMatchesTheUpstreamFilesWhereThisMachineHasThem) {
   expect_spec_matches(common, kAttitude);
   expect_spec_matches(common, kAttitudeQuaternion);
   expect_spec_matches(common, kSetGpsGlobalOrigin);
+  expect_spec_matches(common, kNamedValueFloat);
 }
 
 TEST(Mavlink, ObstacleDistanceRoundTripsInWireOrder) {

@@ -10,6 +10,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -92,6 +93,7 @@ struct Received {
   std::vector<mavlink::StatusText> texts;
   std::vector<mavlink::Timesync> timesync;
   std::vector<mavlink::SetGpsGlobalOrigin> origins;
+  std::vector<mavlink::NamedValueFloat> values;
   void take(const uint8_t* bytes, size_t n) {
     decoder.feed_all(bytes, n, [this](const mavlink::Frame& f) {
       if (f.message_id == mavlink::kOdometry.id) {
@@ -109,6 +111,9 @@ struct Received {
       } else if (f.message_id == mavlink::kSetGpsGlobalOrigin.id) {
         origins.emplace_back();
         mavlink::unpack(f.payload, f.length, &origins.back());
+      } else if (f.message_id == mavlink::kNamedValueFloat.id) {
+        values.emplace_back();
+        mavlink::unpack(f.payload, f.length, &values.back());
       }
     });
   }
@@ -423,6 +428,23 @@ TEST(PoseLink, TimesyncWaitsForTheFirstFrameAndStartsAgainWhenTheSensorsClockJum
   EXPECT_FALSE(link.peer().clock_known);
   link.set_time_base(5'000'000'100, 1'300'000'000);  // a frame's arrival jitter is no jump
   EXPECT_FALSE(link.peer().clock_known);
+}
+
+TEST(PoseLink, TheLatencyGoesOutAsThreeNamedValues) {
+  AutopilotLink wire;
+  PoseLink link;
+  link.init(PoseLinkConfig{}, &wire);
+  link.on_latency(4.5f, 7.75f, 12.0f, 3'000'000'000);
+  ASSERT_EQ(wire.sent.values.size(), 3u);
+  const char* names[] = {"lat_med_ms", "lat_p95_ms", "lat_max_ms"};
+  const float values[] = {4.5f, 7.75f, 12.0f};
+  for (int i = 0; i < 3; ++i) {
+    const mavlink::NamedValueFloat& v = wire.sent.values[static_cast<size_t>(i)];
+    EXPECT_EQ(std::string(v.name, strnlen(v.name, sizeof(v.name))), names[i]);
+    EXPECT_EQ(v.value, values[i]);
+    EXPECT_EQ(v.time_boot_ms, 3000u);
+  }
+  EXPECT_EQ(link.counters().latency_reports, 1u);
 }
 
 // A pseudo-terminal pair: the link writes the slave as it would a UART; the test reads the

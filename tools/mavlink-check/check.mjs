@@ -33,19 +33,25 @@ const heartbeat = () => {
   hb.mavlinkVersion = 3;
   say(hb);
 };
-const ourTs1 = 123456789n;
+// Our TIMESYNC requests, with each heartbeat, as autopilots ask again and again: the runtime
+// answers once its first frame has given it a clock to answer in.
+const ourTs1 = new Set();
+const request = () => {
+  const r = new common.TimeSync();
+  r.tc1 = 0n;
+  r.ts1 = 123456789n + BigInt(ourTs1.size);
+  ourTs1.add(r.ts1);
+  say(r);
+};
 socket.on('message', (data, from) => {
   if (runtime === null) {
     runtime = from;
     heartbeat();
-    const request = new common.TimeSync();
-    request.tc1 = 0n;
-    request.ts1 = ourTs1;
-    say(request);
+    request();
   }
   wire.write(data);
 });
-const timer = setInterval(heartbeat, 500);
+const timer = setInterval(() => { heartbeat(); request(); }, 500);
 
 const child = spawn(binary, ['run', '--board', board, '--board-set',
   `link.udp_remote=127.0.0.1:${socket.address().port}`, '--quiet'], { stdio: ['ignore', 'pipe', 'inherit'] });
@@ -67,6 +73,7 @@ const odometry = byId(common.Odometry.MSG_ID).map((p) => decode(p, common.Odomet
 const heartbeats = byId(minimal.Heartbeat.MSG_ID).map((p) => ({ t: p.timestamp, hb: decode(p, minimal.Heartbeat) }));
 const answers = byId(common.TimeSync.MSG_ID).map((p) => decode(p, common.TimeSync));
 const obstacles = byId(common.ObstacleDistance.MSG_ID).map((p) => decode(p, common.ObstacleDistance));
+const values = byId(common.NamedValueFloat.MSG_ID).map((p) => decode(p, common.NamedValueFloat));
 
 check(splitter.invalidPackages === 0, `${splitter.invalidPackages} frames failed their CRC`);
 check(splitter.unknownPackagesCount === 0, `${splitter.unknownPackagesCount} frames of unknown messages`);
@@ -96,7 +103,7 @@ const expected = Math.ceil((frames / 30));
 check(Math.abs(heartbeats.length - expected) <= 1, `${heartbeats.length} HEARTBEAT in a ${frames / 30} s run`);
 check(heartbeats.every(({ hb }) => hb.type === minimal.MavType.ONBOARD_CONTROLLER), 'HEARTBEAT type');
 // The runtime heard us: it answered our TIMESYNC and reported the autopilot.
-const answer = answers.find((a) => a.tc1 !== 0n && a.ts1 === ourTs1);
+const answer = answers.find((a) => a.tc1 !== 0n && ourTs1.has(a.ts1));
 check(answer !== undefined, 'no answer to our TIMESYNC request');
 if (answer) check(answer.targetSystem === 1 && answer.targetComponent === 1, 'TIMESYNC answer targets');
 check(/autopilot: system 1 component 1, MAV_AUTOPILOT 12 \(PX4\)/.test(stdout), 'the run did not report the autopilot');
@@ -122,12 +129,18 @@ for (const o of obstacles) {
 const obstacleStamps = obstacles.map((o) => Number(o.timeUsec));
 check(obstacleStamps.every((t, i) => i === 0 || t > obstacleStamps[i - 1]), 'OBSTACLE_DISTANCE time_usec not increasing');
 check(known > obstacles.length * 72 / 2, `only ${known} of ${obstacles.length * 72} sectors known`);
+// The latency so far, once a second, as NAMED_VALUE_FLOAT: median <= p95 <= max, all positive.
+const latest = (name) => values.filter((v) => v.name.replace(/\0+$/, '') === name).map((v) => v.value).pop();
+const latency = ['lat_med_ms', 'lat_p95_ms', 'lat_max_ms'].map(latest);
+check(latency.every((v) => v > 0) && latency[0] <= latency[1] && latency[1] <= latency[2],
+  `latency NAMED_VALUE_FLOAT ${latency.join(', ')}`);
 
 console.log(`node-mavlink ${splitter.validPackages} frames, all CRC-valid: ${odometry.length} ODOMETRY ` +
   `(${valid.length} valid) for ${frames} frames, ${heartbeats.length} HEARTBEAT, ` +
   `${answers.length} TIMESYNC (our request answered: ${answer !== undefined}), ` +
   `${unknown} pose(s) with an unknown covariance, ${obstacles.length} OBSTACLE_DISTANCE ` +
-  `(${known} of ${obstacles.length * 72} sectors known)`);
+  `(${known} of ${obstacles.length * 72} sectors known), latency ${latency.map((v) => v && v.toFixed(2)).join(' / ')} ms ` +
+  `(${values.length / 3} NAMED_VALUE_FLOAT sets)`);
 if (failures.length > 0) {
   console.error(`mavlink-check FAILED:\n  ${[...new Set(failures)].join('\n  ')}`);
   process.exit(1);

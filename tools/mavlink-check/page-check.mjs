@@ -93,7 +93,7 @@ await page.waitForFunction((n) => Number(document.getElementById('odometry').tex
   frames, { timeout: 10000 }).catch(() => {});
 await sleep(600);  // one more poll for the last texts
 const dom = {};
-for (const id of ['state', 'odometry', 'valid', 'lost', 'points', 'crc', 'gaps', 'resets', 'autopilot', 'heartbeats', 'quality']) {
+for (const id of ['state', 'odometry', 'valid', 'lost', 'points', 'crc', 'gaps', 'resets', 'autopilot', 'heartbeats', 'quality', 'latency']) {
   dom[id] = await text(id);
 }
 const log = await page.$$eval('#log li', (items) => items.map((i) => i.dataset.text));
@@ -120,6 +120,10 @@ check(dom.crc === '0' && dom.gaps === '0', `page: link errors crc ${dom.crc}, ga
 check(/^present, system 1 component 1, MAV_AUTOPILOT 12$/.test(dom.autopilot), `page: autopilot "${dom.autopilot}"`);
 check(log.some((t) => t.startsWith('autopilot: heard')), 'page: the STATUSTEXT log lacks the autopilot');
 check(Number(dom.heartbeats) >= 1, 'page: no heartbeat');
+// The firmware's latency, once a second: median <= p95 <= max, as run's summary has them.
+const latency = dom.latency.split(' / ').map(Number);
+check(latency.length === 3 && latency.every((v) => v > 0) && latency[0] <= latency[1] && latency[1] <= latency[2],
+  `page: latency "${dom.latency}"`);
 check(blue > 100, `page: the top view drew ${blue} trajectory pixels`);
 const foreign = requests.filter((u) => !u.startsWith(`http://127.0.0.1:${httpPort}/`));
 check(foreign.length === 0, `the page asked for ${foreign.join(', ')}`);
@@ -127,7 +131,7 @@ check(foreign.length === 0, `the page asked for ${foreign.join(', ')}`);
 console.log(`monitor page in Chromium: during the run ${during.points} points, state ${during.state}, ` +
   `${during.rate} Hz; at the end ${dom.odometry} ODOMETRY (${dom.valid} tracked, ${dom.lost} lost) ` +
   `of ${frames} frames, ${dom.points} points, ${blue} path pixels, autopilot "${dom.autopilot}", ` +
-  `${log.length} STATUSTEXT, ${requests.length} requests all to the monitor; screenshots ${out}-during.png, ${out}-end.png`);
+  `latency ${dom.latency} ms, ${log.length} STATUSTEXT, ${requests.length} requests all to the monitor; screenshots ${out}-during.png, ${out}-end.png`);
 if (failures.length > 0) {
   console.error(`page-check FAILED:\n  ${[...new Set(failures)].join('\n  ')}`);
   process.exit(1);

@@ -32,6 +32,15 @@ MonitorEvent MonitorState::on_frame(const mavlink::Frame& f, int64_t now_ns) {
     }
     return MonitorEvent::kNone;
   }
+  if (f.message_id == mavlink::kNamedValueFloat.id) {
+    mavlink::NamedValueFloat v;
+    mavlink::unpack(f.payload, f.length, &v);
+    const std::string name(v.name, strnlen(v.name, sizeof(v.name)));
+    if (name == "lat_med_ms") latency_median_ms = v.value;
+    if (name == "lat_p95_ms") latency_p95_ms = v.value;
+    if (name == "lat_max_ms") latency_max_ms = v.value;
+    return MonitorEvent::kNone;
+  }
   if (f.message_id == mavlink::kStatusText.id) {
     mavlink::StatusText t;
     mavlink::unpack(f.payload, f.length, &t);
@@ -82,6 +91,9 @@ void MonitorState::write_json(std::FILE* out, size_t since) const {
       .integer("sequence_gaps", static_cast<long long>(link.lost_frames))
       .integer("bytes_skipped", static_cast<long long>(link.bytes_skipped))
       .text("autopilot", autopilot.c_str())
+      .number("latency_median_ms", latency_median_ms, 2)
+      .number("latency_p95_ms", latency_p95_ms, 2)
+      .number("latency_max_ms", latency_max_ms, 2)
       .integer("track_size", static_cast<long long>(track.size()))
       .integer("track_from", static_cast<long long>(since));
   std::FILE* s = j.member("track");  // [x, y, z, valid, reset counter] in m, local FRD

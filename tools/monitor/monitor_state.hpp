@@ -46,6 +46,9 @@ class MonitorState {
   double rate_hz = 0;
   mavlink::DecoderCounters link;
   std::string autopilot = "not heard";
+  // The firmware's latency from a frame's arrival to its ODOMETRY so far (NAMED_VALUE_FLOAT
+  // lat_med_ms, lat_p95_ms, lat_max_ms, once a second); negative: not received.
+  float latency_median_ms = -1, latency_p95_ms = -1, latency_max_ms = -1;
   std::vector<MonitorPoint> track;
   std::deque<MonitorText> texts;
 

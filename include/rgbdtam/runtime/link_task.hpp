@@ -66,6 +66,7 @@ class LinkTask {
   ClockFn clock_ = nullptr;
   LatencyStats per_message_;
   LatencyStats arrival_to_odometry_;
+  int64_t latency_reported_ns_ = 0;
   std::atomic<uint8_t> system_status_{3};  // MAV_STATE_STANDBY
   std::atomic<uint64_t> queue_drops_{0};
   Sender sender_{this};

@@ -41,6 +41,7 @@ constexpr MessageSpec kObstacleDistance{330, 167, 23, "OBSTACLE_DISTANCE"};
 constexpr MessageSpec kAttitude{30, 28, 39, "ATTITUDE"};  // received from the autopilot
 constexpr MessageSpec kAttitudeQuaternion{31, 48, 246, "ATTITUDE_QUATERNION"};  // received
 constexpr MessageSpec kSetGpsGlobalOrigin{48, 21, 41, "SET_GPS_GLOBAL_ORIGIN"};
+constexpr MessageSpec kNamedValueFloat{251, 18, 170, "NAMED_VALUE_FLOAT"};
 // The spec of a message id this link knows, or null.
 const MessageSpec* find_spec(uint32_t id);
 
@@ -139,6 +140,13 @@ struct SetGpsGlobalOrigin {
   uint64_t time_usec = 0;
 };
 
+// A named value a ground station plots (the link's latency, once a second).
+struct NamedValueFloat {
+  uint32_t time_boot_ms = 0;
+  float value = 0;
+  char name[10] = {};  // not NUL-terminated when all 10 are used
+};
+
 // Payload (wire order) of each message; returns the full, untruncated length.
 int pack(const Heartbeat& m, uint8_t* payload);
 int pack(const StatusText& m, uint8_t* payload);
@@ -146,6 +154,7 @@ int pack(const Timesync& m, uint8_t* payload);
 int pack(const Attitude& m, uint8_t* payload);
 int pack(const AttitudeQuaternion& m, uint8_t* payload);
 int pack(const SetGpsGlobalOrigin& m, uint8_t* payload);
+int pack(const NamedValueFloat& m, uint8_t* payload);
 
 // Joins STATUSTEXT chunks back into whole texts, as a ground station does.
 class StatusTextJoiner {
@@ -169,6 +178,7 @@ void unpack(const uint8_t* payload, int length, ObstacleDistance* m);
 void unpack(const uint8_t* payload, int length, Attitude* m);
 void unpack(const uint8_t* payload, int length, AttitudeQuaternion* m);
 void unpack(const uint8_t* payload, int length, SetGpsGlobalOrigin* m);
+void unpack(const uint8_t* payload, int length, NamedValueFloat* m);
 
 // Frames messages from one system/component, with its own sequence counter.
 class Encoder {
@@ -193,6 +203,7 @@ class Encoder {
   static const MessageSpec& spec_of(const Attitude&) { return kAttitude; }
   static const MessageSpec& spec_of(const AttitudeQuaternion&) { return kAttitudeQuaternion; }
   static const MessageSpec& spec_of(const SetGpsGlobalOrigin&) { return kSetGpsGlobalOrigin; }
+  static const MessageSpec& spec_of(const NamedValueFloat&) { return kNamedValueFloat; }
   uint8_t system_id_, component_id_;
   uint8_t sequence_ = 0;
 };

@@ -50,6 +50,7 @@ struct PoseLinkCounters {
   uint64_t obstacles_refused = 0;
   uint64_t held_unsynced = 0;  // not sent: time_in_autopilot_clock before TIMESYNC answered
   uint64_t origins_sent = 0;
+  uint64_t latency_reports = 0;     // sets of the three NAMED_VALUE_FLOAT
   uint64_t attitudes = 0;           // ATTITUDE(_QUATERNION) from the autopilot handed on
   uint64_t attitudes_unsynced = 0;  // ... not: its clock not yet known
   uint64_t attitudes_dropped = 0;   // ... not: the tracker's queue was full
@@ -91,6 +92,9 @@ class PoseLink {
   // Obstacle sectors measured on the depth frame stamped timestamp_ns (sensor clock), as
   // OBSTACLE_DISTANCE in the body frame.
   void on_obstacles(const ObstacleSectors& sectors, int64_t timestamp_ns, int64_t now_ns);
+  // The latency from a frame's arrival to its ODOMETRY so far, ms, as three NAMED_VALUE_FLOAT a
+  // ground station plots: lat_med_ms, lat_p95_ms, lat_max_ms.
+  void on_latency(float median_ms, float p95_ms, float max_ms, int64_t now_ns);
   // An event for the operator (text is cut to 50 characters).
   void on_status(uint8_t severity, const char* text, int64_t now_ns);
   // Heartbeat and TIMESYNC requests when due, what the autopilot sent, and transport flushing;
