@@ -201,6 +201,11 @@ TEST(Firmware, ThePlaceStoreFillingIsReportedOnceAndCounted) {
 // over a real link. The ODOMETRY frame must come out level: the body's down direction in it is
 // the autopilot's.
 TEST(Firmware, TheAutopilotsAttitudeLevelsTheOdometryFrameAndGuidesTheTracker) {
+#if defined(__SANITIZE_ADDRESS__)
+  // The autopilot plays in real time to frames that must be tracked in real time; under the
+  // sanitizers most are dropped. The release suites and node-mavlink's autopilot-check run it.
+  GTEST_SKIP() << "needs frames tracked in real time, which the sanitizers' build does not";
+#endif
   std::vector<StampedPose> truth;
   int bad = 0;
   ASSERT_TRUE(
