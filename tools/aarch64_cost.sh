@@ -64,3 +64,47 @@ awk -v a="$((a1 - a0))" -v h="$((h1 - h0))" -v n="$frames" -v path="$path" \
     printf "Cortex-A72 1.5 GHz at IPC %.2f: median %.1f ms, p95 %.1f ms per frame\n", ipc, median * s, p95 * s
   }
 }'
+
+# The cycle model. Every translated block of a group's functions goes through llvm-mca's
+# Cortex-A72 scheduling model (the block's steady state when repeated, every load hitting L1 and
+# every branch predicted: a lower bound on the cycles), weighted by how often qemu ran it; the
+# difference of a run of 2 + frames frames and one of 2 leaves init out. Groups: the tracker's
+# thread (the tracking functions above without the keyframe builder's) and the keyframe builder.
+command -v llvm-mca >/dev/null && command -v llvm-mc >/dev/null ||
+  { echo "llvm-mca missing: apt install llvm" >&2; exit 1; }
+builder_pattern='rgbdtam::(KeyframeBuildTask::|KeyframeBuilder::|CannyDetector::|compute_gradients|compute_depth_gradients)'
+tracker_pattern=$(printf '%s' "$pattern" | sed -E 's/KeyframeBuilder::\||CannyDetector::\||compute_gradients\||compute_depth_gradients\|//g')
+block_cycles() {  # $1: function pattern, $2: frames; prints "cycles instructions keyframes"
+  local r
+  r=$(nm -C -S "$arm" | awk '$3 ~ /^[tTwW]$/' | grep -E "$1" |
+      awk '{printf "%s0x%s+0x%s", (n++ ? "," : ""), $1, $2}')
+  qemu-aarch64 -L "$sysroot" -d in_asm,exec,nochain -dfilter "$r" "$arm" "${args[@]}" \
+    --max-frames "$2" --json 2>&1 >"$work/json" | awk -f tools/aarch64_cost/tb_counts.awk > "$work/tb"
+  # Each block between two markers (brk #0x4d43), disassembled in LLVM's syntax for llvm-mca.
+  awk '{print "0x60 0xa8 0x29 0xd4"
+        for (i = 3; i <= NF; i++) { w = $i
+          printf "0x%s 0x%s 0x%s 0x%s\n", substr(w, 7, 2), substr(w, 5, 2), substr(w, 3, 2), substr(w, 1, 2) }}
+       END {print "0x60 0xa8 0x29 0xd4"}' "$work/tb" |
+    llvm-mc --disassemble -triple=aarch64 -mcpu=cortex-a72 /dev/stdin 2>/dev/null |
+    awk '/brk\t#0x4d43/ {if (n) print "# LLVM-MCA-END"; n++; print "# LLVM-MCA-BEGIN tb" n; next}
+         /\.text/ {next} {print}' | sed '$d' > "$work/tb.s"
+  llvm-mca -mtriple=aarch64 -mcpu=cortex-a72 -iterations=100 "$work/tb.s" 2>/dev/null |
+    awk '/Code Region - tb/ {id = substr($NF, 3)} /^Total Cycles:/ {print id, $3 / 100}' > "$work/cycles"
+  local keyframes
+  keyframes=$(sed -E 's/.*"keyframes": ([0-9]+).*/\1/' "$work/json")
+  awk -v k="$keyframes" 'NR == FNR {c[$1] = $2; next}
+       {cycles += $1 * c[FNR]; n += $1 * (NF - 2)} END {printf "%.0f %.0f %d\n", cycles, n, k}' \
+    "$work/cycles" "$work/tb"
+}
+for group in tracker builder; do
+  p=$tracker_pattern; [ "$group" = builder ] && p=$builder_pattern
+  read -r c0 n0 k0 < <(block_cycles "$p" 2)
+  read -r c1 n1 k1 < <(block_cycles "$p" $((2 + frames)))
+  awk -v g="$group" -v c="$((c1 - c0))" -v n="$((n1 - n0))" -v f="$frames" -v k="$((k1 - k0))" 'BEGIN {
+    if (g == "tracker") {
+      printf "cycle model, tracker thread: %.1f M cycles per frame (%.1f M instructions, IPC %.2f): %.1f ms at 1.5 GHz, as a lower bound\n", c / f / 1e6, n / f / 1e6, n / c, c / f / 1.5e6
+    } else if (k > 0) {
+      printf "cycle model, keyframe builder: %.1f M cycles per keyframe (%d keyframes; %.1f M instructions, IPC %.2f): %.1f ms at 1.5 GHz, as a lower bound\n", c / k / 1e6, k, n / k / 1e6, n / c, c / k / 1.5e6
+    }
+  }'
+done

@@ -36,7 +36,7 @@ void usage() {
       "  rgbdtam replay <sequence-dir> --config <file> [--trajectory out.txt]\n"
       "                 [--final-trajectory out.txt] [--map map.ply]\n"
       "                 [--map-in saved.map] [--map-out saved.map]\n"
-      "                 [--set key=value]... [--max-frames N] [--quiet] [--json]\n"
+      "                 [--set key=value]... [--max-frames N] [--paced] [--quiet] [--json]\n"
       "  rgbdtam eval <groundtruth.txt> <estimate.txt> [--json] [--frames rgb.txt]\n"
       "               [--plot out.svg]\n"
       "  rgbdtam params --config <file> [--set key=value]...\n"
@@ -228,6 +228,8 @@ int replay_command(int argc, char** argv) {
       options.map_out_path = argv[++i];
     } else if (std::strcmp(argv[i], "--max-frames") == 0 && i + 1 < argc) {
       if (!parse_max_frames(argv[++i], "replay", &options.max_frames)) return 2;
+    } else if (std::strcmp(argv[i], "--paced") == 0) {
+      options.paced = true;
     } else if (std::strcmp(argv[i], "--quiet") == 0) {
       options.progress = false;
     } else if (std::strcmp(argv[i], "--json") == 0) {

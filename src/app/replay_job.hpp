@@ -30,6 +30,9 @@ struct ReplayOptions {
   Params params;
   bool progress = true;
   int max_frames = 0;  // 0 = all
+  // Each frame at its recorded time, as the sensor delivered it (else as fast as it goes), so
+  // that modules on threads of their own (map.threaded) keep the pace they would keep live.
+  bool paced = false;
 };
 
 class ReplayJob {
@@ -81,7 +84,8 @@ class ReplayJob {
   std::vector<OnKeyframe> on_keyframes_;  // the same
   std::vector<StampedPose> final_estimates_;
   LatencyStats tracking_ms_, frame_ms_;
-  LatencyStats keyframe_ms_;  // keyframes built after their frame's pose
+  int64_t first_frame_ns_ = -1, first_stamp_ns_ = 0;  // paced: the sequence's start
+  LatencyStats tracker_thread_ms_;  // tracking and keyframe orders, without the build
   PoseEstimate last_pose_;
   int processed_ = 0;
   int reported_problems_ = 0;

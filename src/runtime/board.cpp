@@ -122,6 +122,10 @@ const KeySpec kSpecs[] = {
      RGBDTAM_FIELD(tracker.cpu), false},
     {"threads.tracker_priority", ValueType::kInt, 0, 99, "", "tracker SCHED_FIFO (0: normal)",
      RGBDTAM_FIELD(tracker.priority), false},
+    {"threads.builder_cpu", ValueType::kInt, -1, 255, "", "keyframe builder CPU (-1: any)",
+     RGBDTAM_FIELD(builder.cpu), false},
+    {"threads.builder_priority", ValueType::kInt, 0, 99, "",
+     "keyframe builder SCHED_FIFO (0: normal)", RGBDTAM_FIELD(builder.priority), false},
     {"threads.mapper_cpu", ValueType::kInt, -1, 255, "", "mapper CPU (-1: any)",
      RGBDTAM_FIELD(mapper.cpu), false},
     {"threads.mapper_priority", ValueType::kInt, 0, 99, "", "mapper SCHED_FIFO (0: normal)",
@@ -146,6 +150,11 @@ const KeySpec kSpecs[] = {
      RGBDTAM_FIELD(map_seeds), false},
     {"capacity.loop_places", ValueType::kInt, 0, 100000, "", "override loop.places (0: keep)",
      RGBDTAM_FIELD(loop_places), false},
+    {"capacity.finest_tracked_level", ValueType::kInt, 0, 1, "",
+     "1: iterate down to 320x240 only (the small-board profile; 0: full resolution)",
+     RGBDTAM_FIELD(finest_tracked_level), false},
+    {"capacity.photometric_points", ValueType::kInt, 0, 1000000, "",
+     "override tracker.photometric_points (0: keep)", RGBDTAM_FIELD(photometric_points), false},
 };
 #undef RGBDTAM_TEXT
 #undef RGBDTAM_FIELD
@@ -279,17 +288,21 @@ Status validate_board(const Board& b) {
   const struct {
     const char* key;
     const ThreadPlacement& t;
-  } threads[] = {{"threads.tracker_cpu", b.tracker},
-                 {"threads.mapper_cpu", b.mapper},
-                 {"threads.loop_cpu", b.loop},
-                 {"threads.link_cpu", b.link},
-                 {"threads.sensor_cpu", b.sensor}};
+  } threads[] = {{"threads.tracker_cpu", b.tracker}, {"threads.builder_cpu", b.builder},
+                 {"threads.mapper_cpu", b.mapper},   {"threads.loop_cpu", b.loop},
+                 {"threads.link_cpu", b.link},       {"threads.sensor_cpu", b.sensor}};
   for (const auto& t : threads) {
     if (t.t.cpu >= b.cpu_count) {
       return Status::error(StatusCode::kInvalidArgument,
                            "board '%s': %s is %d, but the board has %d CPUs (0-%d)", b.name, t.key,
                            t.t.cpu, b.cpu_count, b.cpu_count - 1);
     }
+  }
+  if (b.builder.cpu >= 0 && b.builder.cpu == b.tracker.cpu) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "board '%s': threads.builder_cpu is the tracker's CPU (%d): the keyframe "
+                         "builder is there to keep its work off that core",
+                         b.name, b.tracker.cpu);
   }
   if ((b.gpio_led_line >= 0 || b.gpio_trigger_line >= 0) && b.gpio_chip[0] == '\0') {
     return Status::error(StatusCode::kInvalidArgument,
@@ -310,7 +323,8 @@ Status apply_board_capacity(const Board& b, Params* p) {
   } overrides[] = {{"map.keyframe_pool", b.keyframe_pool},
                    {"map.queue_frames", b.map_queue_frames},
                    {"map.seeds", b.map_seeds},
-                   {"loop.places", b.loop_places}};
+                   {"loop.places", b.loop_places},
+                   {"tracker.photometric_points", b.photometric_points}};
   char source[kTextBytes + 16];
   std::snprintf(source, sizeof(source), "board '%s'", b.name);
   for (const auto& o : overrides) {
@@ -319,6 +333,8 @@ Status apply_board_capacity(const Board& b, Params* p) {
     std::snprintf(assignment, sizeof(assignment), "%s=%d", o.key, o.value);
     RGBDTAM_RETURN_IF_ERROR(set_param(assignment, source, p));
   }
+  if (b.finest_tracked_level == 1)
+    RGBDTAM_RETURN_IF_ERROR(set_param("tracker.iterations_l0=0", source, p));
   return Status::ok();
 }
 

@@ -62,7 +62,7 @@ void FirmwareRuntime::report_obstacles(const SensorFrame& frame) {
 
 Status FirmwareRuntime::start() {
   RGBDTAM_RETURN_IF_ERROR(place_this_thread(board_.tracker, "rgbdtam-tracker"));
-  RGBDTAM_RETURN_IF_ERROR(slam_.start(board_.mapper, board_.loop));
+  RGBDTAM_RETURN_IF_ERROR(slam_.start(board_.mapper, board_.loop, board_.builder));
   RGBDTAM_RETURN_IF_ERROR(link_.start(board_.link));
   started_ = true;
   return Status::ok();

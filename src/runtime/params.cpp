@@ -128,7 +128,7 @@ const KeySpec kSpecs[] = {
     {"map.enabled", ValueType::kBool, 0, 1, "", "multi-view mapping of each new keyframe",
      RGBDTAM_FIELD(map_enabled), false},
     {"map.threaded", ValueType::kBool, 0, 1, "",
-     "run the mapper on its own thread (else synchronously, deterministic)",
+     "build keyframes and map on threads of their own (else synchronously, deterministic)",
      RGBDTAM_FIELD(map_threaded), false},
     {"map.queue_frames", ValueType::kInt, 1, 64, "",
      "tracker-to-mapper queue slots; a full queue drops the frame", RGBDTAM_FIELD(map_queue_frames),

@@ -5,7 +5,7 @@ namespace rgbdtam {
 MemoryNeed memory_need(const Params& p, int vocabulary_words) {
   // The pyramids, undistortion maps and scratch images of the tracker and of the mapper, per
   // pixel of the camera; measured by test_allocations (it counts what init allocates).
-  constexpr size_t kTrackerImageBytesPerPixel = 94, kMapperImageBytesPerPixel = 86;
+  constexpr size_t kTrackerImageBytesPerPixel = 83, kMapperImageBytesPerPixel = 86;
   const size_t pixels = static_cast<size_t>(p.camera.width_px) * p.camera.height_px;
   const size_t seeds = p.map_enabled ? static_cast<size_t>(p.map_seeds) : 0;
   MemoryNeed m;
@@ -20,7 +20,8 @@ MemoryNeed memory_need(const Params& p, int vocabulary_words) {
                seeds * (sizeof(FusedPixel) + 2 * sizeof(MapPoint));  // + the local maps
   }
   m.images =
-      pixels * (kTrackerImageBytesPerPixel + (p.map_enabled ? kMapperImageBytesPerPixel : 0));
+      pixels * (kTrackerImageBytesPerPixel + (p.map_enabled ? kMapperImageBytesPerPixel : 0)) +
+      KeyframeBuildTask::bytes_needed(p, static_cast<int>(seeds));
   if (p.loop.enabled && vocabulary_words > 0) {
     // The places, the loop module (its recogniser, view aligner and graph) and the tracker's
     // relocaliser, the keyframe queue's images and the corrections.
@@ -38,7 +39,12 @@ MemoryNeed memory_need(const Params& p, int vocabulary_words) {
 Status SlamSystem::init(const Params& params, ClockFn clock, MapSink* sink,
                         const Vocabulary* vocabulary) {
   params_ = params;
-  RGBDTAM_RETURN_IF_ERROR(tracking_.init(params, &keyframes_));
+  RGBDTAM_RETURN_IF_ERROR(tracking_.init(params, &keyframes_, &building_, clock));
+  if (params.map_threaded) {
+    constexpr int kOrdersInFlight = 1;
+    build_queue_.allocate(kOrdersInFlight);
+    building_.connect_queue(&build_queue_);
+  }
   loop_on_ = params.loop.enabled && vocabulary != nullptr;
   vocabulary_ = vocabulary;
   if (loop_on_) {
@@ -106,11 +112,15 @@ Status SlamSystem::set_checkpoint(MapCheckpoint* checkpoint) {
   return Status::ok();
 }
 
-Status SlamSystem::start(const ThreadPlacement& mapper, const ThreadPlacement& loop) {
+Status SlamSystem::start(const ThreadPlacement& mapper, const ThreadPlacement& loop,
+                         const ThreadPlacement& builder) {
   if (loop_on_ && params_.loop.threaded) {
     RGBDTAM_RETURN_IF_ERROR(loop_thread_.start(&loop_queue_, &loop_, loop, "rgbdtam-loop"));
   }
-  if (!params_.map_enabled || !params_.map_threaded) return Status::ok();
+  if (!params_.map_threaded) return Status::ok();
+  RGBDTAM_RETURN_IF_ERROR(
+      build_thread_.start(&build_queue_, &building_, builder, "rgbdtam-keyframe"));
+  if (!params_.map_enabled) return Status::ok();
   return thread_.start(&queue_, &mapper_, mapper, "rgbdtam-mapper");
 }
 
@@ -132,6 +142,7 @@ bool SlamSystem::keyframe_pose(uint32_t keyframe_id, SE3* T_w_k) {
 
 void SlamSystem::map_pending() {
   build_pending_keyframe();
+  if (params_.map_threaded) build_thread_.notify();
   if (loop_on_) {
     if (params_.loop.threaded) {
       loop_thread_.notify();
@@ -151,6 +162,7 @@ void SlamSystem::map_pending() {
 void SlamSystem::finish() {
   if (finished_) return;
   finished_ = true;
+  if (build_thread_.running()) build_thread_.stop();
   if (loop_on_ && params_.loop.threaded && loop_thread_.running()) loop_thread_.stop();
   if (!params_.map_enabled) return;
   if (params_.map_threaded) {

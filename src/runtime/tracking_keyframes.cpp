@@ -1,5 +1,5 @@
-// The tracker's keyframes: when a new one starts, when an earlier one is reused, the maps the
-// mapper publishes for them, and the frames it is sent.
+// The tracker's keyframes: when a new one is asked for, ordered and adopted, when an earlier one
+// is reused, the maps the mapper publishes for them, and the frames it is sent.
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -84,20 +84,66 @@ bool TrackingPipeline::reuse_keyframe(const Attempt& current, int64_t t_ns, Pose
   return true;
 }
 
-void TrackingPipeline::start_keyframe(int64_t timestamp_ns, const SE3& T_w_c,
-                                      const KeyframeLink& link, PoseEstimate* out) {
-  Keyframe* kf = pool_->acquire(reference_);
-  // With mapping, the new keyframe starts with the previous one's map where its sensor is
-  // blind (the authors' "local map"), until its own multi-view map replaces it.
-  const bool propagate = mapper_queue_ != nullptr;
-  if (propagate) propagate_map(T_w_c);
-  builder_.build(this->frame(), next_keyframe_id_++, timestamp_ns, T_w_c, kf,
-                 propagate ? &propagated_ : nullptr);
-  reference_ = kf;
-  ++counters_.keyframes;
+bool TrackingPipeline::ask_for_keyframe(const SE3& T_w_k, const KeyframeLink& link, bool to_mapper,
+                                        PoseEstimate* out) {
+  if (!building_->idle()) return false;
+  // Ordered after the pose is out (build_pending_keyframe), from this frame's buffer, which the
+  // next frame leaves alone until then.
   out->flags |= kNewKeyframe;
-  out->keyframe_id = kf->id;
-  offer_to_loop(*kf, link);
+  out->keyframe_id = next_keyframe_id_;
+  pending_keyframe_.due = true;
+  pending_keyframe_.frame_buffer = current_;
+  pending_keyframe_.T_w_k = T_w_k;
+  pending_keyframe_.link = link;
+  pending_keyframe_.to_mapper = to_mapper;
+  return true;
+}
+
+void TrackingPipeline::build_pending_keyframe() {
+  if (!pending_keyframe_.due) return;
+  pending_keyframe_.due = false;
+  const FramePyramid& f = frames_[pending_keyframe_.frame_buffer];
+  const size_t pixels = static_cast<size_t>(f.gray(0).size());
+  std::memcpy(building_->gray_level0().data(), f.gray(0).data(), sizeof(float) * pixels);
+  std::memcpy(building_->inverse_depth_level0().data(), f.inverse_depth(0).data(),
+              sizeof(float) * pixels);
+  // With mapping, the new keyframe starts with the local maps where its sensor is blind, until
+  // its own multi-view map replaces them.
+  const bool with_local_maps = mapper_queue_ != nullptr;
+  for (int i = 0; with_local_maps && i < KeyframeBuildTask::kLocalMaps; ++i) {
+    LocalMap& m = building_->local_map(i);
+    m.T_w_k = local_maps_[i].T_w_k;
+    m.points.clear();
+    for (const MapPoint& p : local_maps_[i].points) (void)m.points.push_back(p);
+  }
+  pending_keyframe_.reset_counter = reset_counter_;
+  KeyframeOrder order;
+  order.id = next_keyframe_id_++;
+  order.timestamp_ns = pending_keyframe_.pose.timestamp_ns;
+  order.T_w_k = pending_keyframe_.T_w_k;
+  order.with_local_maps = with_local_maps;
+  building_->submit(order);
+  adopt_built_keyframe();  // built already when synchronous
+}
+
+void TrackingPipeline::adopt_built_keyframe() {
+  if (!building_->built()) return;
+  if (pending_keyframe_.reset_counter != reset_counter_) {
+    // Its pose is from before the map moved (a restart, relocalisation or loop correction).
+    ++counters_.keyframes_stale;
+    building_->release();
+    return;
+  }
+  Keyframe* kf = pool_->acquire(reference_);
+  building_->hand_over(kf);
+  reference_ = kf;
+  fallback_ = nullptr;
+  ++counters_.keyframes;
+  offer_to_loop(*kf, pending_keyframe_.link, building_->frame());
+  if (pending_keyframe_.to_mapper) {
+    offer_to_mapper(pending_keyframe_.pose, building_->frame(), &building_->edges());
+  }
+  building_->release();
 }
 
 void TrackingPipeline::adopt_map(Keyframe* kf) {
@@ -109,30 +155,10 @@ void TrackingPipeline::adopt_map(Keyframe* kf) {
   for (const MapPoint& p : kf->map_points) (void)m.points.push_back(p);
 }
 
-void TrackingPipeline::propagate_map(const SE3& T_w_c) {
-  ImageF& map = propagated_.inverse_depth_level0();
-  const ImageF& sensor = frame().inverse_depth(0);
-  std::memcpy(map.data(), sensor.data(), sizeof(float) * static_cast<size_t>(map.size()));
-  const Pinhole pinhole = frame().intrinsics(0).pinhole();
-  for (const LocalMap& local : local_maps_) {
-    const SE3 T_c_k = T_w_c.inverse() * local.T_w_k;
-    for (const MapPoint& p : local.points) {
-      const Eigen::Vector3f q = (T_c_k * Vector3d(p.x, p.y, p.z)).cast<float>();
-      if (q.z() < 0.05f) continue;
-      float u_px, v_px;
-      pinhole.project(q.x(), q.y(), q.z(), &u_px, &v_px);
-      const long u = std::lround(u_px);
-      const long v = std::lround(v_px);
-      if (u < 0 || v < 0 || u >= map.width() || v >= map.height()) continue;
-      if (sensor.at(u, v) > 0.f) continue;                 // the sensor's own reading wins
-      map.at(u, v) = std::max(map.at(u, v), 1.f / q.z());  // nearest wins
-    }
-  }
-  propagated_.build_inverse_depth_levels();
-}
-
-void TrackingPipeline::offer_to_mapper(const PoseEstimate& pose, bool new_keyframe) {
+void TrackingPipeline::offer_to_mapper(const PoseEstimate& pose, const FramePyramid& f,
+                                       const ImageU8* keyframe_edges) {
   if (mapper_queue_ == nullptr) return;
+  const bool new_keyframe = keyframe_edges != nullptr;
   MapperFrame* slot = mapper_queue_->begin_push();
   if (slot == nullptr) {
     ++counters_.mapper_dropped_frames;
@@ -143,12 +169,12 @@ void TrackingPipeline::offer_to_mapper(const PoseEstimate& pose, bool new_keyfra
   slot->reset_counter = pose.reset_counter;
   slot->timestamp_ns = pose.timestamp_ns;
   slot->T_w_c = pose.T_w_c;
-  std::memcpy(slot->gray.data(), frame().gray(0).data(), sizeof(float) * slot->gray.size());
+  std::memcpy(slot->gray.data(), f.gray(0).data(), sizeof(float) * slot->gray.size());
   slot->new_keyframe = KeyframeHandle();
   if (new_keyframe) {
-    std::memcpy(slot->inverse_depth.data(), frame().inverse_depth(0).data(),
+    std::memcpy(slot->inverse_depth.data(), f.inverse_depth(0).data(),
                 sizeof(float) * slot->inverse_depth.size());
-    std::memcpy(slot->edges.data(), builder_.edges().data(), slot->edges.size());
+    std::memcpy(slot->edges.data(), keyframe_edges->data(), slot->edges.size());
     slot->new_keyframe = pool_->handle(reference_);
     pool_->pin(slot->new_keyframe);
   }

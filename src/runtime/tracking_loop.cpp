@@ -32,7 +32,7 @@ void TrackingPipeline::find_in_loaded_map(const SensorFrame& frame, PoseEstimate
   }
   localising_ = false;
   out->reset_counter = reset_counter_;
-  offer_to_mapper(*out, true);
+  if (!pending_keyframe_.due) offer_to_mapper(*out, this->frame(), nullptr);
   current_ = 1 - current_;
   last_valid_frame_kept_ = true;
   previous_valid_ = true;
@@ -61,7 +61,8 @@ LoopKeyframe* TrackingPipeline::loop_slot() {
   return slot;
 }
 
-void TrackingPipeline::offer_to_loop(const Keyframe& kf, const KeyframeLink& link) {
+void TrackingPipeline::offer_to_loop(const Keyframe& kf, const KeyframeLink& link,
+                                     const FramePyramid& f) {
   LoopKeyframe* slot = loop_slot();
   if (slot == nullptr) return;
   slot->kind = LoopKeyframe::Kind::kKeyframe;
@@ -73,10 +74,10 @@ void TrackingPipeline::offer_to_loop(const Keyframe& kf, const KeyframeLink& lin
   slot->T_w_k = kf.T_w_k;
   slot->T_reference_keyframe = link.T_reference_keyframe;
   slot->information = link.information;
-  std::memcpy(slot->gray.data(), frame().gray(0).data(), sizeof(float) * slot->gray.size());
-  std::memcpy(slot->inverse_depth.data(), frame().inverse_depth(0).data(),
+  std::memcpy(slot->gray.data(), f.gray(0).data(), sizeof(float) * slot->gray.size());
+  std::memcpy(slot->inverse_depth.data(), f.inverse_depth(0).data(),
               sizeof(float) * slot->inverse_depth.size());
-  capture_view(frame(), &slot->view);
+  capture_view(f, &slot->view);
   loop_queue_->publish();
 }
 
@@ -98,7 +99,11 @@ void TrackingPipeline::offer_reuse_to_loop(const Attempt& left, const Attempt& t
 }
 
 bool TrackingPipeline::relocalise(const SensorFrame& frame, PoseEstimate* out) {
-  if (places_ == nullptr || !params_.loop.relocalise || !this->frame().has_depth()) return false;
+  // A relocalised frame may become a keyframe: it waits until none is being built.
+  if (places_ == nullptr || !params_.loop.relocalise || !this->frame().has_depth() ||
+      !building_->idle()) {
+    return false;
+  }
   const Relocalisation found =
       relocaliser_.find(this->frame(), has_last_ ? &T_w_last_ : nullptr, places_, *vocabulary_);
   if (!found.found) return false;
@@ -139,7 +144,7 @@ bool TrackingPipeline::relocalise(const SensorFrame& frame, PoseEstimate* out) {
                             link.T_reference_keyframe);
     }
     fallback_ = nullptr;
-    start_keyframe(frame.timestamp_ns, T_w_c, link, out);
+    (void)ask_for_keyframe(T_w_c, link, true, out);
     ++counters_.relocalised_on_new_keyframe;
     out->T_w_c = T_w_c;
     out->flags |= kPoseValid;

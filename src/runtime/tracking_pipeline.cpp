@@ -20,19 +20,21 @@ constexpr double kPriorGateSigmas = 3.0;
 constexpr int64_t kMaxVelocityGapNs = 200'000'000;
 }  // namespace
 
-Status TrackingPipeline::init(const Params& params, KeyframePool* keyframes) {
+Status TrackingPipeline::init(const Params& params, KeyframePool* keyframes,
+                              KeyframeBuildTask* building, ClockFn clock) {
   params_ = params;
   pool_ = keyframes;
+  building_ = building;
   params_.tracker = tracking_options(params);
   params_.health = health_limits(params);
   undistorter_.init(params_.camera, params_.distortion);
   for (FramePyramid& f : frames_) {
     f.allocate(params_.camera, params_.sensor.depth_factor, params_.sensor.depth_range);
   }
-  propagated_.allocate(params_.camera, params_.sensor.depth_factor, params_.sensor.depth_range);
   builder_.allocate(params_.camera, params_.tracker);
   const int map_points = params_.map_enabled ? params_.map_seeds : 0;
   pool_->allocate(params_.keyframe_pool_size, builder_, map_points);
+  building_->allocate(params_, map_points, clock);
   for (LocalMap& m : local_maps_) m.points.reserve_once(map_points);
   Keyframe model;
   builder_.allocate_keyframe(&model);
@@ -197,13 +199,10 @@ void TrackingPipeline::accept(const Attempt& a, const SensorFrame& frame, PoseEs
   // error instead of 0.2-0.9 %, and tracking on that map drifts).
   const bool moved = r.parallax > params_.tracker.keyframe_parallax && !pool_->pinned(a.kf);
   const bool new_view = r.overlap < params_.tracker.keyframe_overlap || moved;
-  if (new_view && !reuse_keyframe(a, frame.timestamp_ns, out) && this->frame().has_depth()) {
-    // Built after the pose is out (build_pending_keyframe), from this frame's buffer, which the
-    // next frame leaves alone.
-    out->flags |= kNewKeyframe;
-    out->keyframe_id = next_keyframe_id_;
-    pending_keyframe_.due = true;
-    pending_keyframe_.frame_buffer = current_;
+  if (!building_->idle()) {
+    ++counters_.frames_awaiting_keyframe;
+  } else if (new_view && !reuse_keyframe(a, frame.timestamp_ns, out) && this->frame().has_depth()) {
+    (void)ask_for_keyframe(out->T_w_c, odometry_link(out->T_w_c, out->information), true, out);
   }
 }
 
@@ -215,11 +214,10 @@ void TrackingPipeline::on_lost(const SensorFrame& frame, uint32_t failed, PoseEs
   // sensor the frames that follow are relocalisation's chances, not lost time already spent.
   if (lost_since_ns_ < 0) lost_since_ns_ = frame.timestamp_ns;
   if (frame.timestamp_ns - lost_since_ns_ >= params_.reset_after_lost_ns &&
-      this->frame().has_depth()) {
+      this->frame().has_depth() && ask_for_keyframe(T_w_last_, restart_link(), false, out)) {
     // Restart from the last valid pose: the estimate jumps, so say so.
     fallback_ = nullptr;
     lost_since_ns_ = -1;
-    start_keyframe(frame.timestamp_ns, T_w_last_, restart_link(), out);
     last_ns_ = frame.timestamp_ns;
     velocity_.setZero();
     last_valid_frame_kept_ = false;
@@ -231,6 +229,13 @@ void TrackingPipeline::on_lost(const SensorFrame& frame, uint32_t failed, PoseEs
 
 PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
   build_pending_keyframe();  // in case the caller has not
+  adopt_built_keyframe();
+  const PoseEstimate out = track(frame);
+  if (pending_keyframe_.due) pending_keyframe_.pose = out;
+  return out;
+}
+
+PoseEstimate TrackingPipeline::track(const SensorFrame& frame) {
   PoseEstimate out;
   out.sequence = frame.sequence;
   out.timestamp_ns = frame.timestamp_ns;
@@ -261,7 +266,8 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
   }
 
   if (reference_ == nullptr) {
-    if (!pyramid.has_depth()) {
+    // Waiting for the first keyframe too, when it is built on another thread.
+    if (!pyramid.has_depth() || !building_->idle()) {
       out.flags |= kNotInitialised;
       return out;
     }
@@ -269,7 +275,7 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
       find_in_loaded_map(frame, &out);
       return out;
     }
-    start_keyframe(frame.timestamp_ns, SE3(), restart_link(), &out);
+    (void)ask_for_keyframe(SE3(), restart_link(), true, &out);
     T_w_last_ = SE3();
     last_ns_ = frame.timestamp_ns;
     has_last_ = true;
@@ -278,7 +284,6 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
     out.overlap = 1.f;
     out.reset_counter = reset_counter_;
     ++counters_.tracked;
-    offer_to_mapper(out, true);
     current_ = 1 - current_;
     last_valid_frame_kept_ = true;
     previous_valid_ = true;
@@ -318,11 +323,8 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
   pending_flags_ = 0;
   out.reset_counter = reset_counter_;
   const bool valid = (out.flags & kPoseValid) != 0;
-  if (pending_keyframe_.due) {
-    pending_keyframe_.pose = out;  // offered to the mapper with its keyframe
-  } else if (valid) {
-    offer_to_mapper(out, (out.flags & kNewKeyframe) != 0);
-  }
+  // A keyframe's frame goes to the mapper with the keyframe, once built.
+  if (valid && !pending_keyframe_.due) offer_to_mapper(out, this->frame(), nullptr);
   if (valid && t <= withhold_until_ns_) {
     out.flags = (out.flags & ~kPoseValid) | kSettling;
     ++counters_.withheld;
@@ -331,17 +333,6 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
   last_valid_frame_kept_ = last_valid_frame_kept_ || valid;
   previous_valid_ = valid;
   return out;
-}
-
-void TrackingPipeline::build_pending_keyframe() {
-  if (!pending_keyframe_.due) return;
-  pending_keyframe_.due = false;
-  const int current = current_;
-  current_ = pending_keyframe_.frame_buffer;  // frame() is the keyframe's frame meanwhile
-  PoseEstimate& pose = pending_keyframe_.pose;
-  start_keyframe(pose.timestamp_ns, pose.T_w_c, odometry_link(pose.T_w_c, pose.information), &pose);
-  offer_to_mapper(pose, true);
-  current_ = current;
 }
 
 }  // namespace rgbdtam

@@ -158,8 +158,9 @@ TEST(Freenect, RawDisparityConversionFollowsTheOpenKinectModel) {
 // Tracks every frame of a source; returns the poses.
 std::vector<SE3> track_all(SensorSource* source, const Params& params, int frames) {
   KeyframePool keyframes;
+  KeyframeBuildTask building;
   TrackingPipeline pipeline;
-  EXPECT_TRUE(pipeline.init(params, &keyframes).is_ok());
+  EXPECT_TRUE(pipeline.init(params, &keyframes, &building).is_ok());
   std::vector<SE3> poses;
   for (int i = 0; i < frames; ++i) {
     SensorFrame f;

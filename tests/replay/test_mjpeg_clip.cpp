@@ -62,8 +62,9 @@ std::vector<StampedPose> track_camera(bool mjpeg, int* frames_delivered) {
   EXPECT_TRUE(opened.is_ok()) << opened.message();
   const Params params = clip_params();
   KeyframePool keyframes;
+  KeyframeBuildTask building;
   TrackingPipeline pipeline;
-  EXPECT_TRUE(pipeline.init(params, &keyframes).is_ok());
+  EXPECT_TRUE(pipeline.init(params, &keyframes, &building).is_ok());
   std::vector<StampedPose> poses;
   *frames_delivered = 0;
   for (;;) {

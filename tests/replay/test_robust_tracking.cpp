@@ -31,8 +31,9 @@ Verdicts track_and_judge(const testing::SyntheticScene& scene,
                          std::vector<PoseEstimate>* poses = nullptr,
                          const BeforeFrame& before = nullptr) {
   KeyframePool keyframes;
+  KeyframeBuildTask building;
   TrackingPipeline pipeline;
-  EXPECT_TRUE(pipeline.init(testing::synthetic_params(scene), &keyframes).is_ok());
+  EXPECT_TRUE(pipeline.init(testing::synthetic_params(scene), &keyframes, &building).is_ok());
   Verdicts v;
   for (size_t i = 0; i < frames.size(); ++i) {
     const SensorFrame frame = frames[i].as_sensor_frame(scene.camera, static_cast<int>(i), fps);

@@ -135,6 +135,9 @@ TEST(Board, BadBoardsAreClearErrors) {
   expect_error(testing::with_changes(kMinimal, "link.baud = 50\n"), "bad.conf:9: key 'link.baud'");
   expect_error(testing::with_changes(kMinimal, "threads.mapper_cpu = 2\n"),
                "threads.mapper_cpu is 2, but the board has 2 CPUs");
+  expect_error(
+      testing::with_changes(kMinimal, "threads.tracker_cpu = 1\nthreads.builder_cpu = 1\n"),
+      "threads.builder_cpu is the tracker's CPU (1)");
   expect_error(testing::with_changes(kMinimal, "gpio.led_line = 3\n"), "gpio.chip is empty");
   expect_error(testing::with_changes(kMinimal, "link.T_b_c = 1 0 0\n"), "link.T_b_c");
   expect_error(testing::with_changes(kMinimal, "link.T_b_c = 2 0 0 0 0 0 0\n"), "link.T_b_c");
@@ -163,6 +166,23 @@ TEST(Board, CapacityOverridesAreCheckedLikeParams) {
   ASSERT_FALSE(s.is_ok());
   EXPECT_NE(std::string(s.message()).find("board 'bad'"), std::string::npos) << s.message();
   EXPECT_NE(std::string(s.message()).find("map.keyframe_pool"), std::string::npos);
+}
+
+TEST(Board, TheSmallBoardProfileTracksDownTo320x240WithTheBoardsPointBudget) {
+  Board b;
+  ASSERT_TRUE(parse_board(testing::with_changes(kMinimal,
+                                                "capacity.finest_tracked_level = 1\n"
+                                                "capacity.photometric_points = 4000\n")
+                              .c_str(),
+                          "small.conf", "board/small", &b)
+                  .is_ok());
+  Params p;
+  ASSERT_TRUE(apply_board_capacity(b, &p).is_ok());
+  EXPECT_EQ(p.tracker.max_iterations[0], 0);
+  EXPECT_GT(p.tracker.max_iterations[1], 0);
+  EXPECT_EQ(p.tracker.photometric_points_finest, 4000);
+  expect_error(testing::with_changes(kMinimal, "capacity.finest_tracked_level = 2\n"),
+               "out of range");
 }
 
 TEST(Board, EndpointsSplit) {

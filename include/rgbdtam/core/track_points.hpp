@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <utility>
 
 #include "rgbdtam/core/assert.hpp"
 
@@ -52,6 +53,14 @@ class TrackPoints {
     return p;
   }
   void clear() { size_ = 0; }
+  // Two sets of the same capacity trade buffers (no copy, no allocation).
+  void swap(TrackPoints& other) {
+    RGBDTAM_ASSERT(capacity_ == other.capacity_, "TrackPoints swapped across capacities");
+    storage_.swap(other.storage_);
+    std::swap(base_, other.base_);
+    std::swap(stride_, other.stride_);
+    std::swap(size_, other.size_);
+  }
   int size() const { return size_; }
   int padded_size() const { return round_up(size_, kBlock); }
   int capacity() const { return capacity_; }

@@ -59,13 +59,17 @@ struct Board {
   int gpio_led_line = -1;           // status LED, -1 = none
   int gpio_trigger_line = -1;       // frame trigger output to the sensor, -1 = none
 
-  ThreadPlacement tracker, mapper, loop, link, sensor;
+  ThreadPlacement tracker, builder, mapper, loop, link, sensor;
 
   // Capacity overrides on the params (0 = keep the params file's value).
   int keyframe_pool = 0;
   int map_queue_frames = 0;
   int map_seeds = 0;
   int loop_places = 0;
+  // The small-board profile: tracking iterates down to 320x240 only (the 640x480 level is
+  // evaluated once, for the health checks and the pose's information), with fewer points.
+  int finest_tracked_level = 0;
+  int photometric_points = 0;
 
   char directory[kTextBytes] = "";  // the board folder; relative paths in the file start here
 };

@@ -80,8 +80,8 @@ struct Params {
   int64_t reset_after_lost_ns = 500'000'000;
   // Multi-view mapping of each new keyframe (fr1_xyz all-frames ATE 0.84 cm with, 0.88 without).
   bool map_enabled = true;
-  bool map_threaded = false;         // the mapper on its own thread (replay: synchronous)
-  int map_queue_frames = 4;          // tracker -> mapper queue slots
+  bool map_threaded = false;  // keyframe builder, mapper on threads of their own (replay: sync)
+  int map_queue_frames = 4;   // tracker -> mapper queue slots
   int map_frames_per_keyframe = 10;  // frames triangulated per keyframe (code)
   // Spacing of triangulated frames relative to the median depth. All-frames ATE on fr1_xyz:
   // 0.91 cm at 0.005 and 0.01, 0.88 at 0.02, 0.87 at 0.03 (0.88 without mapping).

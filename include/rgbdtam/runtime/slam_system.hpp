@@ -1,6 +1,7 @@
 #pragma once
-// Tracking and mapping wired together: the tracking pipeline, its queue to the mapper, and the
-// mapper, stepped synchronously after each frame (deterministic replay) or on its own thread.
+// Tracking and mapping wired together: the tracking pipeline, the keyframe builder, its queue to
+// the mapper, and the mapper, stepped synchronously after each frame (deterministic replay) or
+// on threads of their own.
 // init() allocates everything, start() starts the mapper thread; process() never allocates.
 
 #include "rgbdtam/runtime/map_checkpoint.hpp"
@@ -40,16 +41,18 @@ class SlamSystem {
   // After init, before start: saves while running, on the loop module's thread (loop.threaded,
   // map.mode slam).
   Status set_checkpoint(MapCheckpoint* checkpoint);
-  // Starts the mapper's and loop module's threads when map.threaded, loop.threaded (after
-  // init, as every thread is).
+  // Starts the keyframe builder's and mapper's threads when map.threaded, the loop module's
+  // when loop.threaded (after init, as every thread is).
   Status start(const ThreadPlacement& mapper = ThreadPlacement(),
-               const ThreadPlacement& loop = ThreadPlacement());
+               const ThreadPlacement& loop = ThreadPlacement(),
+               const ThreadPlacement& builder = ThreadPlacement());
   // track() then map_pending().
   PoseEstimate process(const SensorFrame& frame);
   PoseEstimate track(const SensorFrame& frame) { return tracking_.process(frame); }
   // The next frame's turn as another sensor saw it (TrackingPipeline::set_rotation_prior).
   void set_rotation_prior(const RotationPrior& prior) { tracking_.set_rotation_prior(prior); }
-  // After the pose is out: the keyframe the frame asked for (if it did not, nothing) ...
+  // After the pose is out: the keyframe the frame asked for is ordered (if it did not,
+  // nothing) ...
   void build_pending_keyframe() { tracking_.build_pending_keyframe(); }
   // ... then, synchronous mode: the mapper's and loop module's steps for what the tracker
   // queued; threaded: a wake-up. Builds the pending keyframe first if it is still due.
@@ -59,6 +62,7 @@ class SlamSystem {
 
   const TrackingPipeline& tracking() const { return tracking_; }
   const MappingModule& mapper() const { return mapper_; }
+  const KeyframeBuildTask& keyframe_building() const { return building_; }
   const LoopModule& loop() const { return loop_; }
   // The places (loop.places records), for what they hold and have forgotten.
   const PlaceStore& places() const { return places_; }
@@ -73,6 +77,9 @@ class SlamSystem {
   Params params_;
   KeyframePool keyframes_;  // dense tier; the light tier is places_
   TrackingPipeline tracking_;
+  KeyframeBuildTask building_;
+  KeyframeOrderQueue build_queue_;
+  KeyframeBuildThread build_thread_;
   MapperQueue queue_;
   MappingModule mapper_;
   MappingThread thread_;

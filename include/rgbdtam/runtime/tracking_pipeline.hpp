@@ -1,10 +1,12 @@
 #pragma once
 // The tracking module: sensor frame -> frontend (undistortion, pyramids) -> tracker ->
-// health checks -> keyframe decision -> pose estimate. Everything is sized in init();
+// health checks -> keyframe decision -> pose estimate. The keyframes it decides on are built by
+// the keyframe building module and adopted between frames. Everything is sized in init();
 // process() never allocates.
 // Thread: the caller's (replay: main thread; runtime: the tracking task).
 
 #include "rgbdtam/core/attitude.hpp"
+#include "rgbdtam/runtime/keyframe_building.hpp"
 #include "rgbdtam/runtime/keyframe_pool.hpp"
 #include "rgbdtam/runtime/loop_closing.hpp"
 #include "rgbdtam/runtime/mapping.hpp"
@@ -21,6 +23,8 @@ struct TrackingCounters {
   uint32_t without_depth = 0;
   uint32_t depth_not_surface = 0;  // ... of which the sensor's depth was set aside as noise
   uint32_t keyframes = 0;
+  uint32_t frames_awaiting_keyframe = 0;  // tracked against the last one while the next was built
+  uint32_t keyframes_stale = 0;  // built after a reset or correction moved the map: not adopted
   uint32_t resets = 0;
   uint32_t reused = 0;                    // keyframe switches that reused an earlier keyframe
   uint32_t mapper_dropped_frames = 0;     // the mapper queue was full
@@ -41,15 +45,19 @@ struct TrackingCounters {
 
 class TrackingPipeline {
  public:
-  // keyframes: the dense keyframe store, allocated here, shared with the mapper.
-  Status init(const Params& params, KeyframePool* keyframes);
+  // keyframes: the dense keyframe store, allocated here, shared with the mapper; building: where
+  // new keyframes are built, allocated here (synchronous unless its queue is connected).
+  Status init(const Params& params, KeyframePool* keyframes, KeyframeBuildTask* building,
+              ClockFn clock = nullptr);
   PoseEstimate process(const SensorFrame& frame);
   // For the next process() only: the camera's turn since the last tracked frame, as another
   // sensor saw it (from last_tracked_ns() to the frame's stamp; otherwise ignored).
   void set_rotation_prior(const RotationPrior& prior) { prior_ = prior; }
   int64_t last_tracked_ns() const { return has_last_ ? last_ns_ : -1; }
-  // The keyframe a frame asked for is built after its pose is out: here, or at the next
-  // process() at the latest. Until then the previous keyframe stays the reference.
+  // The keyframe a frame asked for is ordered after its pose is out: here, or at the next
+  // process() at the latest. Synchronous building builds and adopts it here; otherwise it is
+  // adopted at the first process() after it is built. Until then the previous keyframe stays
+  // the reference.
   void build_pending_keyframe();
   // Every tracked frame is offered to the mapper through this queue (never waiting on it).
   void connect_mapper(MapperQueue* queue) { mapper_queue_ = queue; }
@@ -102,7 +110,7 @@ class TrackingPipeline {
   void apply_correction(const LoopCorrection& c);
   // A free slot of the loop module's queue, or null (no loop module, or full: counted).
   LoopKeyframe* loop_slot();
-  void offer_to_loop(const Keyframe& kf, const KeyframeLink& link);
+  void offer_to_loop(const Keyframe& kf, const KeyframeLink& link, const FramePyramid& f);
   void offer_reuse_to_loop(const Attempt& left, const Attempt& taken);
   // The link of a keyframe at T_w_c tracked against the reference with this information.
   KeyframeLink odometry_link(const SE3& T_w_c, const Matrix6d& tracker_information) const;
@@ -111,10 +119,15 @@ class TrackingPipeline {
   Keyframe* keyframe_from_last_valid_frame();
   void accept(const Attempt& a, const SensorFrame& frame, PoseEstimate* out);
   void on_lost(const SensorFrame& frame, uint32_t failed, PoseEstimate* out);
-  void start_keyframe(int64_t timestamp_ns, const SE3& T_w_c, const KeyframeLink& link,
-                      PoseEstimate* out);
-  void offer_to_mapper(const PoseEstimate& pose, bool new_keyframe);
-  void propagate_map(const SE3& T_w_c);
+  PoseEstimate track(const SensorFrame& frame);
+  // This frame becomes a keyframe at T_w_k once its pose is out (build_pending_keyframe); false
+  // while another is being built. to_mapper: the mapper maps it (a restart is not mapped).
+  bool ask_for_keyframe(const SE3& T_w_k, const KeyframeLink& link, bool to_mapper,
+                        PoseEstimate* out);
+  void adopt_built_keyframe();
+  // keyframe_edges: the frame is a new keyframe (the reference) with these Canny edges.
+  void offer_to_mapper(const PoseEstimate& pose, const FramePyramid& f,
+                       const ImageU8* keyframe_edges);
   void adopt_map(Keyframe* kf);
   bool reuse_keyframe(const Attempt& current, int64_t t_ns, PoseEstimate* out);
 
@@ -124,16 +137,12 @@ class TrackingPipeline {
   FramePyramid frames_[2];
   int current_ = 0;
   bool last_valid_frame_kept_ = false;  // frames_[1 - current_] is the frame of last_ns_
-  FramePyramid propagated_;  // sensor depth plus the local maps (photometric points only)
-  // The last two keyframe maps the tracker adopted (the authors' "local maps"), in the world.
-  struct LocalMap {
-    FixedVector<MapPoint> points;  // keyframe frame
-    SE3 T_w_k;
-  };
-  LocalMap local_maps_[2];
+  // The last two keyframe maps the tracker adopted, copied into each keyframe order.
+  LocalMap local_maps_[KeyframeBuildTask::kLocalMaps];
   int next_local_map_ = 0;
-  KeyframeBuilder builder_;
+  KeyframeBuilder builder_;  // the last valid frame's keyframe while tracking fails, at once
   KeyframePool* pool_ = nullptr;
+  KeyframeBuildTask* building_ = nullptr;
   Tracker tracker_;
   Keyframe* reference_ = nullptr;
   Keyframe* fallback_ = nullptr;  // built from the last valid frame while tracking fails
@@ -149,9 +158,13 @@ class TrackingPipeline {
   uint32_t next_keyframe_id_ = 0;
   bool localising_ = false;  // in a loaded map, not found in it yet
   struct PendingKeyframe {
-    bool due = false;
-    int frame_buffer = 0;  // frames_[frame_buffer] is the keyframe's frame
-    PoseEstimate pose;     // the frame's, offered to the mapper with the keyframe
+    bool due = false;      // asked for, not ordered yet
+    int frame_buffer = 0;  // frames_[frame_buffer] is the keyframe's frame until ordered
+    SE3 T_w_k;
+    KeyframeLink link;
+    bool to_mapper = false;
+    PoseEstimate pose;           // the frame's, offered to the mapper with the keyframe
+    uint32_t reset_counter = 0;  // when ordered: a reset or correction since makes it stale
   };
   PendingKeyframe pending_keyframe_;
   // The last valid pose and the camera's twist (v, omega per second) before it.
