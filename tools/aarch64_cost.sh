@@ -20,7 +20,7 @@ host=build/bin/rgbdtam
 arm=${4:-build/aarch64}/bin/rgbdtam
 for b in "$host" "$arm"; do [ -x "$b" ] || { echo "build $b first" >&2; exit 1; }; done
 command -v qemu-aarch64 >/dev/null || { echo "qemu-aarch64 missing: tools/setup.sh --aarch64" >&2; exit 1; }
-command -v valgrind >/dev/null || { echo "valgrind missing" >&2; exit 1; }
+command -v valgrind >/dev/null || { echo "valgrind missing: tools/setup.sh --cost" >&2; exit 1; }
 sysroot=/usr/aarch64-linux-gnu
 # The tracking path's functions (the classes and the kernels of tracker.cpp and pyramid.cpp).
 pattern='rgbdtam::(Tracker::|TrackingPipeline::|KeyframeBuilder::|CannyDetector::|FramePyramid::|Undistorter::|count_surface_pixels|compute_gradients|compute_depth_gradients|\(anonymous namespace\)::(add_normal_equations|project_points|geometric_residuals|weigh_rows|sum_padded|dot_lanes|downsample_gray|downsample_inverse_depth|central_differences))'
@@ -71,7 +71,7 @@ awk -v a="$((a1 - a0))" -v h="$((h1 - h0))" -v n="$frames" -v path="$path" \
 # difference of a run of 2 + frames frames and one of 2 leaves init out. Groups: the tracker's
 # thread (the tracking functions above without the keyframe builder's) and the keyframe builder.
 command -v llvm-mca >/dev/null && command -v llvm-mc >/dev/null ||
-  { echo "llvm-mca missing: apt install llvm" >&2; exit 1; }
+  { echo "llvm-mca missing: tools/setup.sh --cost" >&2; exit 1; }
 builder_pattern='rgbdtam::(KeyframeBuildTask::|KeyframeBuilder::|CannyDetector::|compute_gradients|compute_depth_gradients)'
 tracker_pattern=$(printf '%s' "$pattern" | sed -E 's/KeyframeBuilder::\||CannyDetector::\||compute_gradients\||compute_depth_gradients\|//g')
 block_cycles() {  # $1: function pattern, $2: frames; prints "cycles instructions keyframes"

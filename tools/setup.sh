@@ -4,7 +4,8 @@
 # (download only: the host's package set is not changed to multiarch).
 # With --fuzz it installs clang, whose libFuzzer tools/fuzz.sh uses; with --opencv, OpenCV's
 # contrib modules for rgbdtam-vs-opencv; with --browser, Debian's Chromium for the monitor's
-# page test and openssh for the HIL runner's loopback test.
+# page test and openssh for the HIL runner's loopback test; with --cost, valgrind and LLVM (its
+# llvm-mca) for tools/aarch64_cost.sh.
 # Always: static libusb (without udev) and libfreenect (with fakenect) built from Debian's
 # source packages into .deps/<triplet> for the static firmware's Kinect v1 backend
 # (tools/build_kinect_libs.sh), for aarch64 too with --aarch64.
@@ -15,13 +16,15 @@ aarch64=false
 fuzz=false
 opencv=false
 browser=false
+cost=false
 for arg in "$@"; do
   case "$arg" in
     --aarch64) aarch64=true ;;
     --fuzz) fuzz=true ;;
     --opencv) opencv=true ;;
     --browser) browser=true ;;
-    *) echo "usage: tools/setup.sh [--aarch64] [--fuzz] [--opencv] [--browser]" >&2; exit 2 ;;
+    --cost) cost=true ;;
+    *) echo "usage: tools/setup.sh [--aarch64] [--fuzz] [--opencv] [--browser] [--cost]" >&2; exit 2 ;;
   esac
 done
 
@@ -44,6 +47,7 @@ command -v node >/dev/null && command -v npm >/dev/null || packages+=(nodejs npm
 # ccache: the test command's two aarch64 boards share their core's objects through it.
 if $aarch64; then packages+=(g++-aarch64-linux-gnu qemu-user ccache); fi
 if $fuzz; then packages+=(clang); fi  # libFuzzer ships with Debian's clang
+if $cost; then packages+=(valgrind llvm); fi
 # rgbdtam-vs-opencv (the dynamic build's host benchmark) compares with OpenCV's RgbdOdometry.
 if $opencv; then packages+=(libopencv-dev libopencv-contrib-dev); fi
 if $browser; then packages+=(chromium openssh-server openssh-client); fi

@@ -53,6 +53,12 @@ node tools/mavlink-check/check.mjs build/bin/rgbdtam board/host-emulation
 build/bin/rgbdtam-stress wall "$logs/wall" --distance-m 2 --yaw-deg 20 --frames 30 >/dev/null
 node tools/mavlink-check/obstacle-check.mjs build/bin/rgbdtam board/host-emulation "$logs/wall" 2 20
 node tools/mavlink-check/autopilot-check.mjs build/bin/rgbdtam board/host-emulation "$PWD/data/tum_fr1_xyz_clip"
+echo "=== the task-table simulator: hand-checked traces, then the clip's trace ($(date +%T))"
+python3 tools/task_sim_test.py build/bin/rgbdtam
+build/bin/rgbdtam replay data/tum_fr1_xyz_clip --config config/tum_fr1.conf --quiet \
+  --trace "$logs/clip-trace.csv" >/dev/null
+python3 tools/task_sim.py "$logs/clip-trace.csv" --board board/host-emulation | tee "$logs/clip-sim.txt"
+grep -q "^deadline misses 0, dropped frames 0" "$logs/clip-sim.txt"
 echo "=== the monitor's live page in headless Chromium ($(date +%T))"
 node tools/mavlink-check/page-check.mjs build/bin board/host-emulation build/monitor-page
 # With the shared-library backends: Debian's libfreenect against its fakenect, OpenNI2's Dummy

@@ -36,7 +36,8 @@ void usage() {
       "  rgbdtam replay <sequence-dir> --config <file> [--trajectory out.txt]\n"
       "                 [--final-trajectory out.txt] [--map map.ply]\n"
       "                 [--map-in saved.map] [--map-out saved.map]\n"
-      "                 [--set key=value]... [--max-frames N] [--paced] [--quiet] [--json]\n"
+      "                 [--set key=value]... [--max-frames N] [--paced] [--trace out.csv]\n"
+      "                 [--quiet] [--json]\n"
       "  rgbdtam eval <groundtruth.txt> <estimate.txt> [--json] [--frames rgb.txt]\n"
       "               [--plot out.svg]\n"
       "  rgbdtam params --config <file> [--set key=value]...\n"
@@ -228,6 +229,8 @@ int replay_command(int argc, char** argv) {
       options.map_out_path = argv[++i];
     } else if (std::strcmp(argv[i], "--max-frames") == 0 && i + 1 < argc) {
       if (!parse_max_frames(argv[++i], "replay", &options.max_frames)) return 2;
+    } else if (std::strcmp(argv[i], "--trace") == 0 && i + 1 < argc) {
+      options.trace_path = argv[++i];
     } else if (std::strcmp(argv[i], "--paced") == 0) {
       options.paced = true;
     } else if (std::strcmp(argv[i], "--quiet") == 0) {
@@ -255,8 +258,16 @@ int replay_command(int argc, char** argv) {
   const NamedOutput outputs[] = {{"--trajectory", options.trajectory_path},
                                  {"--final-trajectory", options.final_trajectory_path},
                                  {"--map", map_path},
-                                 {"--map-out", options.map_out_path}};
-  if (outputs_clash(outputs, 4, options.params, c.config, options.sequence, options.map_in_path)) {
+                                 {"--map-out", options.map_out_path},
+                                 {"--trace", options.trace_path}};
+  if (outputs_clash(outputs, 5, options.params, c.config, options.sequence, options.map_in_path)) {
+    return 2;
+  }
+  if (options.trace_path != nullptr &&
+      (options.params.map_threaded || options.params.loop.threaded)) {
+    std::fprintf(stderr,
+                 "rgbdtam replay: --trace times each module alone, so it needs the synchronous "
+                 "modes (map.threaded = false, loop.threaded = false)\n");
     return 2;
   }
   if (map_path != nullptr && !options.params.map_enabled) {

@@ -7,6 +7,7 @@
 #include "json_line.hpp"
 #include "loop_summary.hpp"
 #include "memory_budget.hpp"
+#include "rgbdtam/hal/atomic_file.hpp"
 #include "rgbdtam/hal/clock.hpp"
 #include "rgbdtam/runtime/pose_link.hpp"
 
@@ -62,6 +63,7 @@ Status ReplayJob::init(const ReplayOptions& options) {
   reserve_touched(&covariances_, frames, Eigen::Matrix<double, 6, 6>::Zero().eval());
   reserve_touched(&on_keyframes_, frames, OnKeyframe());
   reserve_touched(&final_estimates_, frames, StampedPose{0.0, SE3()});
+  if (options.trace_path != nullptr) reserve_touched(&trace_, frames, TraceRow());
   started_ns_ = monotonic_ns();
   return Status::ok();
 }
@@ -99,9 +101,14 @@ bool ReplayJob::step() {
   // synchronous build is the builder's time, not the tracker's.
   const bool built_here = !options_.params.map_threaded &&
                           system_.keyframe_building().time_per_keyframe().count() > builds;
-  tracker_thread_ms_.add(monotonic_ns() - t1 -
-                         (built_here ? system_.keyframe_building().last_build_ns() : 0));
+  const int64_t build_ns = built_here ? system_.keyframe_building().last_build_ns() : 0;
+  const int64_t tracker_ns = monotonic_ns() - t1 - build_ns;
+  tracker_thread_ms_.add(tracker_ns);
   system_.map_pending();
+  if (options_.trace_path != nullptr) {
+    trace_.push_back({frame.timestamp_ns, waited_from - t0, tracker_ns, build_ns, built_here,
+                      system_.last_mapper_steps(), system_.last_loop_steps()});
+  }
   write_failure_ = writer_.write(last_pose_);
   const double t_s = static_cast<double>(last_pose_.timestamp_ns) * 1e-9;
   if ((last_pose_.flags & kPoseValid) != 0) {
@@ -143,6 +150,7 @@ Status ReplayJob::finish() {
     closed = save_map_file(options_.map_out_path, system_, options_.written_by);
     map_save_ns_ = closed.is_ok() ? monotonic_ns() - t0 : 0;
   }
+  if (options_.trace_path != nullptr && closed.is_ok()) closed = write_trace();
   if (options_.final_trajectory_path != nullptr && closed.is_ok()) {
     TrajectoryWriter final_writer;
     closed = final_writer.open(options_.final_trajectory_path);
@@ -157,6 +165,28 @@ Status ReplayJob::finish() {
     if (closed.is_ok()) closed = final_writer.close();
   }
   return write_failure_.is_ok() ? closed : write_failure_;
+}
+
+Status ReplayJob::write_trace() const {
+  AtomicFileWriter file;
+  RGBDTAM_RETURN_IF_ERROR(file.init(options_.trace_path));
+  RGBDTAM_RETURN_IF_ERROR(file.begin());
+  char line[160];
+  int n = std::snprintf(line, sizeof(line),
+                        "stamp_ns,sensor_ns,tracker_ns,keyframe,build_ns,mapper_items,mapper_ns,"
+                        "loop_items,loop_ns\n");
+  bool ok = file.write(line, static_cast<size_t>(n));
+  for (const TraceRow& r : trace_) {
+    n = std::snprintf(line, sizeof(line), "%lld,%lld,%lld,%d,%lld,%d,%lld,%d,%lld\n",
+                      static_cast<long long>(r.stamp_ns), static_cast<long long>(r.sensor_ns),
+                      static_cast<long long>(r.tracker_ns), r.keyframe ? 1 : 0,
+                      static_cast<long long>(r.build_ns), r.mapper.items,
+                      static_cast<long long>(r.mapper.ns), r.loop.items,
+                      static_cast<long long>(r.loop.ns));
+    ok = ok && file.write(line, static_cast<size_t>(n));
+  }
+  (void)ok;  // commit() names a failed write
+  return file.commit();
 }
 
 void ReplayJob::print_summary() const {
@@ -182,12 +212,12 @@ void ReplayJob::print_summary() const {
     const MappingCounters& m = system_.mapper().counters();
     const double n = m.keyframes_mapped > 0 ? m.keyframes_mapped : 1;
     std::printf(
-        "mapping: %u keyframes mapped (%s), %u frames triangulated, %u frames and %u "
-        "keyframes dropped at the queue; per keyframe %.0f sensor, %.0f multi-view, "
-        "%.0f fused edge points; mapper ms/keyframe median %.1f, p95 %.1f\n",
+        "mapping: %u keyframes mapped (%s), %u frames triangulated, %u skipped to catch up, "
+        "%u frames and %u keyframes dropped at the queue; per keyframe %.0f sensor, %.0f "
+        "multi-view, %.0f fused edge points; mapper ms/keyframe median %.1f, p95 %.1f\n",
         m.keyframes_mapped, options_.params.map_threaded ? "own thread" : "synchronous",
-        m.frames_observed, c.mapper_dropped_frames, c.mapper_dropped_keyframes, m.points_sensor / n,
-        m.points_multiview / n, m.points_fused / n,
+        m.frames_observed, m.frames_skipped_late, c.mapper_dropped_frames,
+        c.mapper_dropped_keyframes, m.points_sensor / n, m.points_multiview / n, m.points_fused / n,
         system_.mapper().time_per_keyframe().percentile_ms(0.5),
         system_.mapper().time_per_keyframe().percentile_ms(0.95));
   }

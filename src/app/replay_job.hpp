@@ -33,6 +33,9 @@ struct ReplayOptions {
   // Each frame at its recorded time, as the sensor delivered it (else as fast as it goes), so
   // that modules on threads of their own (map.threaded) keep the pace they would keep live.
   bool paced = false;
+  // Optional, synchronous mode only: a CSV line per frame of each module's time in it, for
+  // tools/task_sim.py, which replays it through a board's task table.
+  const char* trace_path = nullptr;
 };
 
 class ReplayJob {
@@ -44,6 +47,7 @@ class ReplayJob {
   void request_stop() { stop_requested_.store(true); }  // async-signal-safe
   bool stopped_early() const { return stop_requested_.load(); }
   Status finish();  // the trajectory complete and in place, or the first failure
+  Status write_trace() const;
   void print_summary() const;
   // The summary and the evaluation as one JSON object, for tools/bench.sh.
   void print_json(const EvaluationReport& report) const;
@@ -85,7 +89,13 @@ class ReplayJob {
   std::vector<StampedPose> final_estimates_;
   LatencyStats tracking_ms_, frame_ms_;
   int64_t first_frame_ns_ = -1, first_stamp_ns_ = 0;  // paced: the sequence's start
-  LatencyStats tracker_thread_ms_;  // tracking and keyframe orders, without the build
+  LatencyStats tracker_thread_ms_;
+  struct TraceRow {
+    int64_t stamp_ns, sensor_ns, tracker_ns, build_ns;
+    bool keyframe;
+    SlamSystem::Steps mapper, loop;
+  };
+  std::vector<TraceRow> trace_;  // tracking and keyframe orders, without the build
   PoseEstimate last_pose_;
   int processed_ = 0;
   int reported_problems_ = 0;

@@ -382,9 +382,21 @@ void RunJob::print_summary() const {
       latency.percentile_ms(0.5), latency.percentile_ms(0.95), latency.max_ms(),
       static_cast<long long>(latency.count()));
   const MappingModule& m = runtime_->slam().mapper();
-  std::printf("mapper task ms/keyframe: median %.1f, p95 %.1f, max %.1f over %u keyframes\n",
-              m.time_per_keyframe().percentile_ms(0.5), m.time_per_keyframe().percentile_ms(0.95),
-              m.time_per_keyframe().max_ms(), m.counters().keyframes_mapped);
+  const TrackingCounters& tracking = runtime_->slam().tracking().counters();
+  std::printf(
+      "mapper task ms/keyframe: median %.1f, p95 %.1f, max %.1f over %u keyframes; %u frames "
+      "skipped to catch up, %u frames (%u keyframes) dropped at its full queue\n",
+      m.time_per_keyframe().percentile_ms(0.5), m.time_per_keyframe().percentile_ms(0.95),
+      m.time_per_keyframe().max_ms(), m.counters().keyframes_mapped,
+      m.counters().frames_skipped_late, tracking.mapper_dropped_frames,
+      tracking.mapper_dropped_keyframes);
+  const LatencyStats& builds = runtime_->slam().keyframe_building().time_per_keyframe();
+  std::printf(
+      "keyframe builder ms/keyframe: median %.1f, p95 %.1f, max %.1f over %lld; %u frames "
+      "tracked against the last keyframe while the next was built, %u built stale\n",
+      builds.percentile_ms(0.5), builds.percentile_ms(0.95), builds.max_ms(),
+      static_cast<long long>(builds.count()), tracking.frames_awaiting_keyframe,
+      tracking.keyframes_stale);
   print_loop_summary(runtime_->slam());
   if (board_.map_file[0] != '\0') {
     std::printf("map file: %s: %u places loaded%s; %s; %u saves while running, %u failed%s%s\n",

@@ -133,6 +133,11 @@ void MappingModule::step(const MapperFrame& frame) {
     slot->spent_ns += clock_() - t0;
     return;
   }
+  if (late()) {
+    ++counters_.frames_skipped_late;
+    remember(frame);
+    return;
+  }
   for (Job& job : jobs_) {
     if (job.keyframe == nullptr) continue;
     // A frame is used once it has moved far enough, relative to the scene, from the last one.
@@ -147,6 +152,12 @@ void MappingModule::step(const MapperFrame& frame) {
     if (job.frames_used >= params_.map_frames_per_keyframe) finalize(&job);
   }
   remember(frame);
+}
+
+bool MappingModule::late() const {
+  if (queue_ == nullptr) return false;
+  const int waiting = queue_->size() - 1;  // behind the frame in hand
+  return waiting > 0 && waiting >= queue_->capacity() / 2;
 }
 
 void MappingModule::finish() {

@@ -39,6 +39,7 @@ MemoryNeed memory_need(const Params& p, int vocabulary_words) {
 Status SlamSystem::init(const Params& params, ClockFn clock, MapSink* sink,
                         const Vocabulary* vocabulary) {
   params_ = params;
+  clock_ = clock;
   RGBDTAM_RETURN_IF_ERROR(tracking_.init(params, &keyframes_, &building_, clock));
   if (params.map_threaded) {
     constexpr int kOrdersInFlight = 1;
@@ -58,6 +59,7 @@ Status SlamSystem::init(const Params& params, ClockFn clock, MapSink* sink,
   if (params.map_enabled) {
     queue_.allocate(params.map_queue_frames, params.camera.width_px, params.camera.height_px);
     RGBDTAM_RETURN_IF_ERROR(mapper_.init(params, params.camera, clock, sink, &keyframes_));
+    mapper_.connect_queue(&queue_);
     tracking_.connect_mapper(&queue_);
   }
   return Status::ok();
@@ -143,11 +145,14 @@ bool SlamSystem::keyframe_pose(uint32_t keyframe_id, SE3* T_w_k) {
 void SlamSystem::map_pending() {
   build_pending_keyframe();
   if (params_.map_threaded) build_thread_.notify();
+  auto now = [this] { return clock_ != nullptr ? clock_() : 0; };
   if (loop_on_) {
     if (params_.loop.threaded) {
       loop_thread_.notify();
     } else {
-      drain(&loop_queue_, &loop_);
+      const int64_t t0 = now();
+      last_loop_.items = drain(&loop_queue_, &loop_);
+      last_loop_.ns = now() - t0;
     }
   }
   if (!params_.map_enabled) return;
@@ -155,7 +160,9 @@ void SlamSystem::map_pending() {
     thread_.notify();
   } else {
     // Deterministic replay: the mapper takes its step here, between frames.
-    drain(&queue_, &mapper_);
+    const int64_t t0 = now();
+    last_mapper_.items = drain(&queue_, &mapper_);
+    last_mapper_.ns = now() - t0;
   }
 }
 

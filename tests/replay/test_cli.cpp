@@ -10,6 +10,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "stress_variants.hpp"
 #include "test_paths.hpp"
@@ -161,6 +162,41 @@ TEST(Cli, TwoOutputsOnOnePathAreRefusedAndAFailedInitLeavesNoFile) {
   for (const char* name : {"/t.txt", "/t.txt.partial", "/m.ply", "/m.ply.partial"}) {
     EXPECT_FALSE(exists(dir + name)) << name;
   }
+}
+
+// Issue 20: a trace of each module's time per frame, for tools/task_sim.py.
+TEST(Cli, ATraceHasAFrameALineAndNeedsTheSynchronousModes) {
+  const std::string dir = testing::make_temp_dir("cli_trace");
+  Outcome o = rgbdtam("replay " + clip() + " --config " + config() + " --trace " + dir +
+                      "/trace.csv --quiet");
+  EXPECT_EQ(o.exit_code, 0) << o.err;
+  std::ifstream in(dir + "/trace.csv");
+  std::string line;
+  ASSERT_TRUE(std::getline(in, line));
+  EXPECT_EQ(line,
+            "stamp_ns,sensor_ns,tracker_ns,keyframe,build_ns,mapper_items,mapper_ns,loop_items,"
+            "loop_ns");
+  int frames = 0, keyframes = 0;
+  while (std::getline(in, line)) {
+    ++frames;
+    std::vector<std::string> fields(1);
+    for (char c : line) {
+      if (c == ',') {
+        fields.emplace_back();
+      } else {
+        fields.back() += c;
+      }
+    }
+    ASSERT_EQ(fields.size(), 9u) << line;
+    keyframes += fields[3] == "1" ? 1 : 0;
+  }
+  EXPECT_EQ(frames, 50);
+  EXPECT_GT(keyframes, 0);
+  o = rgbdtam("replay " + clip() + " --config " + config() + " --set map.threaded=true --trace " +
+              dir + "/threaded.csv");
+  EXPECT_EQ(o.exit_code, 2);
+  EXPECT_NE(o.err.find("--trace times each module alone"), std::string::npos) << o.err;
+  EXPECT_FALSE(exists(dir + "/threaded.csv"));
 }
 
 // Issue 23: the summary says what the place store forgot. Every frame of the clip a keyframe

@@ -5,12 +5,17 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
+#include <thread>
 #include <vector>
 
 #include "rgbdtam/core/canny.hpp"
+#include "rgbdtam/hal/clock.hpp"
 #include "rgbdtam/runtime/slam_system.hpp"
 #include "synthetic_scene.hpp"
+#include "tum_writer.hpp"
 
 namespace rgbdtam {
 namespace {
@@ -130,6 +135,51 @@ TEST(SyntheticMapping, FarWallBeyondSensorRangeIsMappedAndTrackingContinuesOnIt)
   }
   std::printf("tracking: worst error %.1f mm; %.1f mm over the %d frames without the box\n",
               worst_m * 1e3, worst_without_box_m * 1e3, frames_without_box);
+}
+
+// Stalls the mapper's thread at its first finished keyframe, as a board too slow for it would.
+class StallingSink : public MapSink {
+ public:
+  void on_keyframe_map(int64_t, const SE3&, const PinholeIntrinsics&,
+                       const FixedVector<FusedPixel>&) override {
+    if (maps_++ == 0) std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  }
+  std::atomic<int> maps_{0};
+};
+
+TEST(SyntheticMapping, AMapperBehindSkipsFramesToCatchUpAndTheTrackerNeverWaits) {
+  // The wall within the sensor's range: tracking needs no map from the mapper.
+  const testing::SyntheticScene scene = far_wall_scene(10.0);
+  Params p = testing::synthetic_params(scene);
+  p.map_enabled = true;
+  p.map_threaded = true;
+  p.map_frames_per_keyframe = 2;  // the first map, and the stall, come early
+  StallingSink sink;
+  SlamSystem slam;
+  ASSERT_TRUE(slam.init(p, monotonic_ns, &sink).is_ok());
+  ASSERT_TRUE(slam.start().is_ok());
+  constexpr int kStalledFrames = 45;
+  const auto& frames = scene.render_path(kStalledFrames, kFps);
+  int tracked = 0;
+  for (int i = 0; i < kStalledFrames; ++i) {
+    const PoseEstimate pose =
+        slam.process(frames[static_cast<size_t>(i)].as_sensor_frame(scene.camera, i, kFps));
+    tracked += (pose.flags & kPoseValid) != 0 ? 1 : 0;
+    // Frames at a tenth of their real period: the stalled mapper falls far behind.
+    std::this_thread::sleep_for(std::chrono::milliseconds(i == 0 ? 50 : 3));
+  }
+  slam.finish();
+  const MappingCounters& m = slam.mapper().counters();
+  const TrackingCounters& c = slam.tracking().counters();
+  EXPECT_EQ(tracked, kStalledFrames);
+  EXPECT_GT(m.frames_skipped_late, 0u) << "the mapper must catch up by skipping frames";
+  // Every keyframe offered reaches a map or is counted as dropped at the queue.
+  EXPECT_EQ(m.keyframes_mapped + c.mapper_dropped_keyframes, c.keyframes);
+  std::printf(
+      "stalled mapper: %u frames observed, %u skipped to catch up, %u dropped at the "
+      "queue (%u keyframes); %u of %u keyframes mapped\n",
+      m.frames_observed, m.frames_skipped_late, c.mapper_dropped_frames, c.mapper_dropped_keyframes,
+      m.keyframes_mapped, c.keyframes);
 }
 
 }  // namespace

@@ -8,6 +8,10 @@
 // Queue policy when full: the tracker never waits. The frame is not queued and is counted in
 // dropped_frames; when it was a new keyframe, that keyframe keeps its sensor-only map and is
 // counted in dropped_keyframes.
+// When late (half the queue or more waits behind the frame in hand), the mapper catches up by
+// observing no frame but keyframes, so that a slow board thins the maps instead of losing
+// keyframes (counted in frames_skipped_late). Synchronous replay drains the queue after every
+// frame, so it is never late.
 
 #include <memory>
 
@@ -41,9 +45,10 @@ using ClockFn = int64_t (*)();
 struct MappingCounters {
   uint32_t keyframes_mapped = 0;
   uint32_t frames_observed = 0;
-  uint64_t points_sensor = 0;     // edge pixels whose depth is the sensor's alone
-  uint64_t points_multiview = 0;  // ... multi-view alone (the sensor saw nothing there)
-  uint64_t points_fused = 0;      // ... both, fused by inverse variance
+  uint32_t frames_skipped_late = 0;  // not observed: the queue was backing up
+  uint64_t points_sensor = 0;        // edge pixels whose depth is the sensor's alone
+  uint64_t points_multiview = 0;     // ... multi-view alone (the sensor saw nothing there)
+  uint64_t points_fused = 0;         // ... both, fused by inverse variance
 };
 
 class MappingModule {
@@ -51,6 +56,8 @@ class MappingModule {
   static constexpr int kOpenKeyframes = 3;  // params.cpp sizes the keyframe pool for this
   Status init(const Params& params, const PinholeIntrinsics& k, ClockFn clock, MapSink* sink,
               KeyframePool* keyframes);
+  // Init time: the queue this module's frames come through, to see when it is late.
+  void connect_queue(const MapperQueue* queue) { queue_ = queue; }
   void step(const MapperFrame& frame);
   // Finishes the keyframe in progress (end of stream).
   void tick() {}
@@ -85,11 +92,13 @@ class MappingModule {
   void start(Job* job, const MapperFrame& frame);
   void observe(Job* job, const ImageF& gray, const SE3& T_w_c);
   void remember(const MapperFrame& frame);
+  bool late() const;
   double spacing_m(const SE3& a, const SE3& b) const;
   void finalize(Job* job);
 
   Params params_;
   KeyframePool* keyframes_ = nullptr;
+  const MapperQueue* queue_ = nullptr;
   MultiViewOptions mv_;
   ClockFn clock_ = nullptr;
   MapSink* sink_ = nullptr;

@@ -57,6 +57,14 @@ class SlamSystem {
   // ... then, synchronous mode: the mapper's and loop module's steps for what the tracker
   // queued; threaded: a wake-up. Builds the pending keyframe first if it is still due.
   void map_pending();
+  // Synchronous mode: the loop module's and the mapper's steps in the last map_pending() and
+  // their time (a clock given to init), for traces of each module's work per frame.
+  struct Steps {
+    int items = 0;
+    int64_t ns = 0;
+  };
+  const Steps& last_loop_steps() const { return last_loop_; }
+  const Steps& last_mapper_steps() const { return last_mapper_; }
   // Lets the mapper finish what is queued and the keyframe in progress.
   void finish();
 
@@ -91,6 +99,8 @@ class SlamSystem {
   LoopModule loop_;
   WorkerThread<LoopKeyframe, LoopModule> loop_thread_;
   bool finished_ = false;
+  ClockFn clock_ = nullptr;
+  Steps last_loop_, last_mapper_;
 };
 
 }  // namespace rgbdtam

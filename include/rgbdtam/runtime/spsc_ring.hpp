@@ -37,6 +37,11 @@ class SpscRing {
     return &slots_[head % capacity_];
   }
   void pop() { head_.store(head_.load(std::memory_order_relaxed) + 1, std::memory_order_release); }
+  // Consumer: how many are published and not popped (the one being read included).
+  int size() const {
+    return static_cast<int>(tail_.load(std::memory_order_acquire) -
+                            head_.load(std::memory_order_relaxed));
+  }
 
  private:
   std::unique_ptr<T[]> slots_;

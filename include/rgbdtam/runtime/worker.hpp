@@ -17,13 +17,15 @@
 
 namespace rgbdtam {
 
-// Synchronous mode: every queued item, in order, on the caller's thread.
+// Synchronous mode: every queued item, in order, on the caller's thread. Returns how many.
 template <typename Item, typename Module>
-void drain(SpscRing<Item>* queue, Module* module) {
-  while (Item* item = queue->front()) {
+int drain(SpscRing<Item>* queue, Module* module) {
+  int steps = 0;
+  for (; Item* item = queue->front(); ++steps) {
     module->step(*item);
     queue->pop();
   }
+  return steps;
 }
 
 template <typename Item, typename Module>
