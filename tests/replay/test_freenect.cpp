@@ -275,6 +275,8 @@ TEST(Freenect, TheFirmwareOnAKinectDumpStreamsThePosesOfTheTumReplayOfItsFrames)
   ASSERT_TRUE(read_text_file((tum + "/camera.conf").c_str(), 1 << 16, &text).is_ok());
   ASSERT_TRUE(parse_params(text, "camera.conf", &params).is_ok());
   delete[] text;
+  // The board's own profile (the Pi 4's small-board tracking) on both sides.
+  ASSERT_TRUE(apply_board_capacity(job.board(), &params).is_ok());
   TumReplaySource replay;
   ASSERT_TRUE(replay.open(tum.c_str(), kW, kH, 20'000'000, 0).is_ok());
   const std::vector<SE3> through_replay = track_all(&replay, params, kFrames);
