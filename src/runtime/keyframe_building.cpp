@@ -28,7 +28,6 @@ void KeyframeBuildTask::allocate(const Params& p, int map_points, ClockFn clock)
 void KeyframeBuildTask::submit(const KeyframeOrder& order) {
   RGBDTAM_ASSERT(!in_flight_, "a keyframe is ordered while another is in flight");
   in_flight_ = true;
-  order_ = order;
   if (queue_ == nullptr) {
     step(order);
     return;

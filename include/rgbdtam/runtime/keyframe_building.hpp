@@ -55,7 +55,6 @@ class KeyframeBuildTask {
   // Tracker, between frames: true once the ordered keyframe is built; then hand_over() moves its
   // points into the pool's slot, and frame() and edges() are the keyframe's until release().
   bool built() const { return in_flight_ && built_.load(std::memory_order_acquire); }
-  const KeyframeOrder& order() const { return order_; }
   void hand_over(Keyframe* kf);
   const FramePyramid& frame() const { return frame_; }
   const ImageU8& edges() const { return builder_.edges(); }
@@ -79,7 +78,6 @@ class KeyframeBuildTask {
   FramePyramid propagated_;  // ... its inverse depth with the local maps where the sensor is blind
   LocalMap local_maps_[kLocalMaps];
   Keyframe keyframe_;       // its points, until handed over
-  KeyframeOrder order_;     // tracker's copy of the order in flight
   bool in_flight_ = false;  // tracker's: submitted, not released
   std::atomic<bool> built_{false};
   LatencyStats per_keyframe_;  // builder's thread
