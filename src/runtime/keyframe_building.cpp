@@ -25,10 +25,10 @@ void KeyframeBuildTask::allocate(const Params& p, int map_points, ClockFn clock)
   for (LocalMap& m : local_maps_) m.points.reserve_once(map_points);
 }
 
-void KeyframeBuildTask::submit(const KeyframeOrder& order) {
+void KeyframeBuildTask::submit(const KeyframeOrder& order, bool at_once) {
   RGBDTAM_ASSERT(!in_flight_, "a keyframe is ordered while another is in flight");
   in_flight_ = true;
-  if (queue_ == nullptr) {
+  if (queue_ == nullptr || at_once) {
     step(order);
     return;
   }

@@ -122,8 +122,10 @@ void TrackingPipeline::build_pending_keyframe() {
   order.timestamp_ns = pending_keyframe_.pose.timestamp_ns;
   order.T_w_k = pending_keyframe_.T_w_k;
   order.with_local_maps = with_local_maps;
-  building_->submit(order);
-  adopt_built_keyframe();  // built already when synchronous
+  // With nothing to track against yet (the first keyframe, or the first in a loaded map), the
+  // tracker has nothing else to do: it is built at once.
+  building_->submit(order, reference_ == nullptr);
+  adopt_built_keyframe();  // built already when synchronous or at once
 }
 
 void TrackingPipeline::adopt_built_keyframe() {

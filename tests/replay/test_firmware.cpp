@@ -480,9 +480,6 @@ TEST(Firmware, TrackingLostAndRegainedAreReportedOnceEach) {
       f.depth = nullptr;
     }
     (void)runtime.on_frame(f, 0);
-    // At the sensor's pace: the first keyframe is built on its own thread before the next frame
-    // needs it (fed at once, the frames before it would have nothing to track against).
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
   runtime.stop();
   std::vector<std::string> texts;

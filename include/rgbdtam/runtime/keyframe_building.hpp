@@ -51,7 +51,9 @@ class KeyframeBuildTask {
   ImageF& gray_level0() { return frame_.gray(0); }
   ImageF& inverse_depth_level0() { return frame_.inverse_depth_level0(); }
   LocalMap& local_map(int i) { return local_maps_[i]; }
-  void submit(const KeyframeOrder& order);
+  // at_once: built here, on the caller's thread, in threaded mode too (nothing is in flight, so
+  // the builder's thread is idle).
+  void submit(const KeyframeOrder& order, bool at_once = false);
   // Tracker, between frames: true once the ordered keyframe is built; then hand_over() moves its
   // points into the pool's slot, and frame() and edges() are the keyframe's until release().
   bool built() const { return in_flight_ && built_.load(std::memory_order_acquire); }
