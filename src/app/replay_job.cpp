@@ -95,12 +95,14 @@ bool ReplayJob::step() {
   const int64_t t1 = monotonic_ns();
   last_pose_ = system_.track(frame);
   const int64_t t2 = monotonic_ns();
-  const int64_t builds = system_.keyframe_building().time_per_keyframe().count();
-  system_.build_pending_keyframe();
   // The tracker's thread as in the firmware: tracking, and ordering and adopting keyframes; a
-  // synchronous build is the builder's time, not the tracker's.
-  const bool built_here = !options_.params.map_threaded &&
-                          system_.keyframe_building().time_per_keyframe().count() > builds;
+  // synchronous build is the builder's time, not the tracker's. (Threaded, the builder's
+  // statistics are its thread's until it stops.)
+  const bool synchronous = !options_.params.map_threaded;
+  const LatencyStats& builds = system_.keyframe_building().time_per_keyframe();
+  const int64_t builds_before = synchronous ? builds.count() : 0;
+  system_.build_pending_keyframe();
+  const bool built_here = synchronous && builds.count() > builds_before;
   const int64_t build_ns = built_here ? system_.keyframe_building().last_build_ns() : 0;
   const int64_t tracker_ns = monotonic_ns() - t1 - build_ns;
   tracker_thread_ms_.add(tracker_ns);
