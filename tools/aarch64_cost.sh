@@ -65,21 +65,50 @@ awk -v a="$((a1 - a0))" -v h="$((h1 - h0))" -v n="$frames" -v path="$path" \
   }
 }'
 
-# The cycle model. Every translated block of a group's functions goes through llvm-mca's
-# Cortex-A72 scheduling model (the block's steady state when repeated, every load hitting L1 and
-# every branch predicted: a lower bound on the cycles), weighted by how often qemu ran it; the
-# difference of a run of 2 + frames frames and one of 2 leaves init out. Groups: the tracker's
-# thread (the tracking functions above without the keyframe builder's) and the keyframe builder.
+# The cycle model, per module. Every translated block qemu ran goes through llvm-mca's Cortex-A72
+# scheduling model (the block's steady state when repeated, every load hitting L1 and every
+# branch predicted: a lower bound on the cycles), weighted by how often it ran. A block is
+# charged to the module whose step function ran last (tb_counts.awk), so helpers that several
+# modules call go to their caller: the run is synchronous, the modules one after another on one
+# thread. Mapping and loop closure are on; the difference of a run of 2 + frames frames and one
+# of 2 leaves init out. The PNG decoder (libpng, zlib) is left out of the logs (a third of their
+# volume; the sensor's cost is not modelled). Each module's host time over the same frames (the
+# least of three traced replays) gives its A72 ratio, what tools/task_sim.py --scale takes.
 command -v llvm-mca >/dev/null && command -v llvm-mc >/dev/null ||
   { echo "llvm-mca missing: tools/setup.sh --cost" >&2; exit 1; }
-builder_pattern='rgbdtam::(KeyframeBuildTask::|KeyframeBuilder::|CannyDetector::|compute_gradients|compute_depth_gradients)'
-tracker_pattern=$(printf '%s' "$pattern" | sed -E 's/KeyframeBuilder::\||CannyDetector::\||compute_gradients\||compute_depth_gradients\|//g')
-block_cycles() {  # $1: function pattern, $2: frames; prints "cycles instructions keyframes"
-  local r
-  r=$(nm -C -S "$arm" | awk '$3 ~ /^[tTwW]$/' | grep -E "$1" |
-      awk '{printf "%s0x%s+0x%s", (n++ ? "," : ""), $1, $2}')
-  qemu-aarch64 -L "$sysroot" -d in_asm,exec,nochain -dfilter "$r" "$arm" "${args[@]}" \
-    --max-frames "$2" --json 2>&1 >"$work/json" | awk -f tools/aarch64_cost/tb_counts.awk > "$work/tb"
+module_args=(replay "$(realpath "$seq")" --config "$(realpath "$config")" --quiet
+             --set map.threaded=false --set loop.threaded=false)
+entries=$(paste -d' ' <(nm "$arm" | awk '{print $NF}') <(nm -C "$arm" | cut -d' ' -f3-) | awk '
+  / rgbdtam::TrackingPipeline::process\(/ {print $1 "=tracker"}
+  / rgbdtam::KeyframeBuildTask::step\(/ {print $1 "=builder"}
+  / rgbdtam::MappingModule::(step|finish)\(/ {print $1 "=mapper"}
+  / rgbdtam::LoopModule::step\(/ {print $1 "=loop"}
+  / rgbdtam::TumReplaySource::next\(/ {print $1 "=sensor"}' | tr '\n' ' ')
+code=$(nm -n -S "$arm" | python3 -c '
+import re, sys
+decoder = re.compile(r"^(png_|_?inflate|adler32|crc32|updatewindow|zcalloc|zcfree|_tr_)")
+ranges, start = [], None
+for line in sys.stdin:
+    f = line.split()
+    if len(f) != 4 or f[2] not in "tTwW":
+        continue
+    a = int(f[0], 16)
+    if decoder.match(f[3]):
+        if start is not None:
+            ranges.append((start, end))
+        start = None
+        continue
+    start = a if start is None else start
+    end = a + int(f[1], 16)
+if start is not None:
+    ranges.append((start, end))
+print(",".join("0x%x+0x%x" % (a, b - a) for a, b in ranges))')
+module_cycles() {  # $1: frames; prints "<module> <cycles> <instructions>" lines and "keyframes <n>"
+  qemu-aarch64 -L "$sysroot" -d in_asm,exec,nochain -dfilter "$code" "$arm" "${module_args[@]}" \
+    --max-frames "$1" --json 2>&1 >"$work/json" | awk -v entries="$entries" -f tools/aarch64_cost/tb_counts.awk |
+    awk -v unique="$work/tb" '{key = $3; for (i = 4; i <= NF; i++) key = key " " $i
+      if (!(key in id)) {id[key] = ++n; print NF - 3, key > unique}
+      print $1, $2, id[key]}' > "$work/owned"
   # Each block between two markers (brk #0x4d43), disassembled in LLVM's syntax for llvm-mca.
   awk '{print "0x60 0xa8 0x29 0xd4"
         for (i = 3; i <= NF; i++) { w = $i
@@ -90,21 +119,34 @@ block_cycles() {  # $1: function pattern, $2: frames; prints "cycles instruction
          /\.text/ {next} {print}' | sed '$d' > "$work/tb.s"
   llvm-mca -mtriple=aarch64 -mcpu=cortex-a72 -iterations=100 "$work/tb.s" 2>/dev/null |
     awk '/Code Region - tb/ {id = substr($NF, 3)} /^Total Cycles:/ {print id, $3 / 100}' > "$work/cycles"
-  local keyframes
-  keyframes=$(sed -E 's/.*"keyframes": ([0-9]+).*/\1/' "$work/json")
-  awk -v k="$keyframes" 'NR == FNR {c[$1] = $2; next}
-       {cycles += $1 * c[FNR]; n += $1 * (NF - 2)} END {printf "%.0f %.0f %d\n", cycles, n, k}' \
-    "$work/cycles" "$work/tb"
+  awk 'FILENAME == ARGV[1] {c[$1] = $2; next} FILENAME == ARGV[2] {size[FNR] = $1; next}
+       {cycles[$1] += $2 * c[$3]; n[$1] += $2 * size[$3]}
+       END {for (m in cycles) printf "%s %.0f %.0f\n", m, cycles[m], n[m]}' \
+    "$work/cycles" "$work/tb" "$work/owned"
+  echo "keyframes $(sed -E 's/.*"keyframes": ([0-9]+).*/\1/' "$work/json")"
 }
-for group in tracker builder; do
-  p=$tracker_pattern; [ "$group" = builder ] && p=$builder_pattern
-  read -r c0 n0 k0 < <(block_cycles "$p" 2)
-  read -r c1 n1 k1 < <(block_cycles "$p" $((2 + frames)))
-  awk -v g="$group" -v c="$((c1 - c0))" -v n="$((n1 - n0))" -v f="$frames" -v k="$((k1 - k0))" 'BEGIN {
-    if (g == "tracker") {
-      printf "cycle model, tracker thread: %.1f M cycles per frame (%.1f M instructions, IPC %.2f): %.1f ms at 1.5 GHz, as a lower bound\n", c / f / 1e6, n / f / 1e6, n / c, c / f / 1.5e6
-    } else if (k > 0) {
-      printf "cycle model, keyframe builder: %.1f M cycles per keyframe (%d keyframes; %.1f M instructions, IPC %.2f): %.1f ms at 1.5 GHz, as a lower bound\n", c / k / 1e6, k, n / k / 1e6, n / c, c / k / 1.5e6
-    }
-  }'
-done
+module_cycles 2 > "$work/m0"
+module_cycles $((2 + frames)) > "$work/m1"
+for run in 1 2 3; do  # each module's host time over frames 3 .. 2 + frames, in ms
+  "$host" "${module_args[@]}" --max-frames $((2 + frames)) --trace "$work/trace" >/dev/null 2>&1
+  awk -F, 'NR > 3 {t += $3; b += $5; m += $7; l += $9}
+           END {printf "tracker %.3f\nbuilder %.3f\nmapper %.3f\nloop %.3f\n", t / 1e6, b / 1e6, m / 1e6, l / 1e6}' \
+    "$work/trace"
+done > "$work/host"
+awk -v f="$frames" 'FILENAME == ARGV[1] {c0[$1] = $2; n0[$1] = $3; next}
+     FILENAME == ARGV[2] {c1[$1] = $2; n1[$1] = $3; next}
+     !($1 in host) || $2 < host[$1] {host[$1] = $2}
+     END {
+  k = c1["keyframes"] - c0["keyframes"]
+  printf "cycle model, A72 at 1.5 GHz, %d frames, %d keyframes (lower bounds; host: this machine over the same frames):\n", f, k
+  split("tracker builder mapper loop", order, " ")
+  for (i = 1; i <= 4; i++) {
+    m = order[i]; c = c1[m] - c0[m]; n = n1[m] - n0[m]
+    per = (m == "tracker") ? f : k; unit = (m == "tracker") ? "frame" : "keyframe"
+    if (per <= 0 || c <= 0) continue
+    a72 = c / per / 1.5e6; h = host[m] / per
+    printf "  %-8s %7.1f M cycles per %s (%.1f M instructions, IPC %.2f): %6.1f ms; host %5.2f ms, ratio %.2f\n", m, c / per / 1e6, unit, n / per / 1e6, n / c, a72, h, a72 / h
+    scale = scale sprintf("%s%s=%.2f", (scale == "" ? "" : ","), m, a72 / h)
+  }
+  printf "tools/task_sim.py --scale %s\n", scale
+}' "$work/m0" "$work/m1" "$work/host"

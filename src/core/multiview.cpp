@@ -3,10 +3,16 @@
 #include <algorithm>
 #include <cmath>
 
+#include "rgbdtam/core/assert.hpp"
+
 namespace rgbdtam {
 namespace {
-constexpr int kPatchSamples = 7;  // 1-D patch along the epipolar line (code)
-constexpr float kPatchSpacingPx = 2.f;
+constexpr int kPatchSamples = 7;       // 1-D patch along the epipolar line (code)
+constexpr int kPatchSpacingSteps = 2;  // 2 px between patch samples, in 1 px scan steps
+constexpr float kPatchSpacingPx = kPatchSpacingSteps;
+constexpr int kPatchReachSteps = kPatchSamples / 2 * kPatchSpacingSteps;  // centre to last sample
+constexpr int kScanMarginSteps = 5;  // 2 steps each side for the parabola, and the ceil
+constexpr int kMaxScanSteps = 256;
 constexpr float kInfiniteCost = 1e30f;
 constexpr float kIntervalSigmas = 4.f;  // a seed's search interval after an observation
 
@@ -30,6 +36,27 @@ struct Epipolar {
   }
 };
 
+// The scan steps i in [0, steps) whose patch centre u0 + (i - 2) d lies inside the image by
+// margin: [*first, *last], solved per axis (the centres move along a line).
+bool steps_inside(const ImageF& img, const Eigen::Vector2f& u0, const Eigen::Vector2f& d,
+                  float margin, int steps, int* first, int* last) {
+  float t_min = -2.f, t_max = static_cast<float>(steps) - 3.f;  // t = i - 2
+  const float hi[2] = {img.width() - 1 - margin, img.height() - 1 - margin};
+  for (int a = 0; a < 2; ++a) {
+    if (std::fabs(d[a]) < 1e-9f) {
+      if (u0[a] < margin || u0[a] > hi[a]) return false;
+      continue;
+    }
+    const float t0 = (margin - u0[a]) / d[a], t1 = (hi[a] - u0[a]) / d[a];
+    t_min = std::max(t_min, std::min(t0, t1));
+    t_max = std::min(t_max, std::max(t0, t1));
+  }
+  if (t_min > t_max) return false;
+  *first = static_cast<int>(std::ceil(t_min)) + 2;
+  *last = static_cast<int>(std::floor(t_max)) + 2;
+  return *first <= *last;
+}
+
 float sample(const ImageF& img, const Eigen::Vector2f& p) {
   return sample_bilinear(img, p.x(), p.y());
 }
@@ -41,6 +68,8 @@ size_t SeedMap::bytes_needed(const MultiViewOptions& opt) {
 }
 
 void SeedMap::allocate(const PinholeIntrinsics& k, const MultiViewOptions& opt) {
+  RGBDTAM_ASSERT(std::ceil(opt.max_search_px) + kScanMarginSteps <= kMaxScanSteps,
+                 "max_search_px exceeds the epipolar scan buffer");
   opt_ = opt;
   k_ = k;
   seeds_.reserve_once(opt.max_seeds);
@@ -88,13 +117,19 @@ void SeedMap::reset(const ImageF& gray, const ImageF& sensor_inverse_depth, cons
     (void)observations_.push_back({0, 0});
 }
 
-bool SeedMap::search(const Seed& s, const ImageF& cur, const SE3& T_c_k, Observation* out) const {
+SeedMap::Motion SeedMap::motion_to(const SE3& T_w_c) const {
+  const SE3 T_c_k = T_w_c.inverse() * T_w_k_;
+  return {T_c_k.rotation().cast<float>(), T_c_k.translation().cast<float>(),
+          -(T_c_k.rotation().transpose() * T_c_k.translation()).cast<float>()};
+}
+
+bool SeedMap::search(const Seed& s, const ImageF& cur, const Motion& m, Observation* out) const {
   Epipolar e;
   e.pinhole = k_.pinhole();
   Eigen::Vector3f d(0.f, 0.f, 1.f);
   e.pinhole.back_project(s.x, s.y, 1.f, &d.x(), &d.y());
-  e.a = T_c_k.rotation().cast<float>() * d;
-  e.t = T_c_k.translation().cast<float>();
+  e.a = m.R_c_k * d;
+  e.t = m.t_c_k;
   Eigen::Vector2f u_far, u_near;
   if (!e.project(s.rho_lo, &u_far) || !e.project(s.rho_hi, &u_near)) return false;
   const Eigen::Vector2f segment = u_near - u_far;
@@ -104,9 +139,7 @@ bool SeedMap::search(const Seed& s, const ImageF& cur, const SE3& T_c_k, Observa
   // The epipolar direction in the keyframe: how the pixel moves towards the current camera.
   const float rho_mid = 0.5f * (s.rho_lo + s.rho_hi);
   const Eigen::Vector3f p = d / rho_mid;
-  const Eigen::Vector3f centre =
-      -(T_c_k.rotation().transpose() * T_c_k.translation()).cast<float>();
-  const Eigen::Vector3f towards = centre - p;
+  const Eigen::Vector3f towards = m.centre_k - p;
   Eigen::Vector2f dir_k(e.pinhole.fx * (towards.x() - p.x() / p.z() * towards.z()) / p.z(),
                         e.pinhole.fy * (towards.y() - p.y() / p.z() * towards.z()) / p.z());
   if (dir_k.norm() < 1e-6f) return false;
@@ -117,7 +150,7 @@ bool SeedMap::search(const Seed& s, const ImageF& cur, const SE3& T_c_k, Observa
   Eigen::Vector3f d_step(0.f, 0.f, 1.f);
   e.pinhole.back_project(s.x + dir_k.x(), s.y + dir_k.y(), 1.f, &d_step.x(), &d_step.y());
   Epipolar stepped = e;
-  stepped.a = T_c_k.rotation().cast<float>() * d_step;
+  stepped.a = m.R_c_k * d_step;
   if (!e.project(rho_mid, &at_mid) || !stepped.project(rho_mid, &shifted)) return false;
   if ((shifted - at_mid).dot(dir_c) < 0.f) dir_k = -dir_k;
   // The patch must cross the edge, not run along it.
@@ -127,22 +160,31 @@ bool SeedMap::search(const Seed& s, const ImageF& cur, const SE3& T_c_k, Observa
   for (int j = 0; j < kPatchSamples; ++j) {
     ref[j] = 255.f * sample(*gray_, origin + (j - kPatchSamples / 2) * kPatchSpacingPx * dir_k);
   }
-  // Scan the segment (plus 2 px each side, for the parabola) in 1 px steps.
-  const int steps = static_cast<int>(std::ceil(length)) + 5;
-  const float margin = 1.f + kPatchSamples / 2 * kPatchSpacingPx;
+  // Scan the segment (plus 2 px each side, for the parabola) in 1 px steps. The patch's samples
+  // are two steps apart, so every sample of every step lies on the line at a whole step from
+  // u_far: the line is sampled once and each step's cost reads seven of those samples.
+  const int steps = static_cast<int>(std::ceil(length)) + kScanMarginSteps;
+  const float margin = 1.f + kPatchReachSteps;
+  int first, last;
+  if (!steps_inside(cur, u_far, dir_c, margin, steps, &first, &last)) return false;
+  const int scored = last - first + 1;
+  float line[kMaxScanSteps + 2 * kPatchReachSteps];
+  const int line_start = first - 2 - kPatchReachSteps;  // in steps from u_far
+  for (int k = 0; k < scored + 2 * kPatchReachSteps; ++k) {
+    line[k] = 255.f * sample(cur, u_far + static_cast<float>(line_start + k) * dir_c);
+  }
+  float costs[kMaxScanSteps];
+  std::fill(costs, costs + scored, 0.f);
+  for (int j = 0; j < kPatchSamples; ++j) {
+    const float r = ref[j];
+    const float* at = line + j * kPatchSpacingSteps;
+    for (int i = 0; i < scored; ++i) costs[i] += std::fabs(r - at[i]);
+  }
   float best_cost = kInfiniteCost, prev = kInfiniteCost, before_best = kInfiniteCost;
   float after_best = kInfiniteCost;
   int best = -1;
   for (int i = 0; i < steps; ++i) {
-    const Eigen::Vector2f c = u_far + (static_cast<float>(i) - 2.f) * dir_c;
-    float cost = kInfiniteCost;
-    if (cur.contains(c.x(), c.y(), margin)) {
-      cost = 0.f;
-      for (int j = 0; j < kPatchSamples; ++j) {
-        cost += std::fabs(
-            ref[j] - 255.f * sample(cur, c + (j - kPatchSamples / 2) * kPatchSpacingPx * dir_c));
-      }
-    }
+    const float cost = i >= first && i <= last ? costs[i - first] : kInfiniteCost;
     if (i == best + 1) after_best = cost;
     if (cost < best_cost) {
       best_cost = cost;
@@ -174,13 +216,13 @@ bool SeedMap::search(const Seed& s, const ImageF& cur, const SE3& T_c_k, Observa
 }
 
 int SeedMap::observe(const ImageF& gray, const SE3& T_w_c) {
-  const SE3 T_c_k = T_w_c.inverse() * T_w_k_;
+  const Motion motion = motion_to(T_w_c);
   int accepted = 0;
   for (int i = 0; i < seeds_.size(); ++i) {
     Seed& s = seeds_[i];
     if (s.count >= opt_.max_observations) continue;
     Observation o;
-    if (!search(s, gray, T_c_k, &o)) continue;
+    if (!search(s, gray, motion, &o)) continue;
     observations_[i * opt_.max_observations + s.count] = o;
     ++s.count;
     s.rho_lo = std::max(opt_.min_inverse_depth, o.rho - kIntervalSigmas * o.sigma);

@@ -77,7 +77,14 @@ class SeedMap {
   struct Observation {
     float rho, sigma;
   };
-  bool search(const Seed& s, const ImageF& gray, const SE3& T_c_k, Observation* out) const;
+  // A frame's pose relative to the keyframe, once per frame rather than per seed.
+  struct Motion {
+    Eigen::Matrix3f R_c_k;
+    Eigen::Vector3f t_c_k;
+    Eigen::Vector3f centre_k;  // the frame's camera centre in the keyframe
+  };
+  Motion motion_to(const SE3& T_w_c) const;
+  bool search(const Seed& s, const ImageF& gray, const Motion& m, Observation* out) const;
 
   MultiViewOptions opt_;
   PinholeIntrinsics k_;
