@@ -89,13 +89,13 @@ class ReplayJob {
   std::vector<StampedPose> final_estimates_;
   LatencyStats tracking_ms_, frame_ms_;
   int64_t first_frame_ns_ = -1, first_stamp_ns_ = 0;  // paced: the sequence's start
-  LatencyStats tracker_thread_ms_;
+  LatencyStats tracker_thread_ms_;  // tracking and keyframe orders, without the build
   struct TraceRow {
     int64_t stamp_ns, sensor_ns, tracker_ns, build_ns;
     bool keyframe;
     SlamSystem::Steps mapper, loop;
   };
-  std::vector<TraceRow> trace_;  // tracking and keyframe orders, without the build
+  std::vector<TraceRow> trace_;
   PoseEstimate last_pose_;
   int processed_ = 0;
   int reported_problems_ = 0;

@@ -145,14 +145,17 @@ bool SlamSystem::keyframe_pose(uint32_t keyframe_id, SE3* T_w_k) {
 void SlamSystem::map_pending() {
   build_pending_keyframe();
   if (params_.map_threaded) build_thread_.notify();
-  auto now = [this] { return clock_ != nullptr ? clock_() : 0; };
+  auto timed_drain = [this](auto* queue, auto* module) {
+    auto now = [this] { return clock_ != nullptr ? clock_() : 0; };
+    const int64_t t0 = now();
+    const int items = drain(queue, module);
+    return Steps{items, now() - t0};
+  };
   if (loop_on_) {
     if (params_.loop.threaded) {
       loop_thread_.notify();
     } else {
-      const int64_t t0 = now();
-      last_loop_.items = drain(&loop_queue_, &loop_);
-      last_loop_.ns = now() - t0;
+      last_loop_ = timed_drain(&loop_queue_, &loop_);
     }
   }
   if (!params_.map_enabled) return;
@@ -160,9 +163,7 @@ void SlamSystem::map_pending() {
     thread_.notify();
   } else {
     // Deterministic replay: the mapper takes its step here, between frames.
-    const int64_t t0 = now();
-    last_mapper_.items = drain(&queue_, &mapper_);
-    last_mapper_.ns = now() - t0;
+    last_mapper_ = timed_drain(&queue_, &mapper_);
   }
 }
 
