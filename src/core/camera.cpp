@@ -1,6 +1,8 @@
 #include "rgbdtam/core/camera.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 
 namespace rgbdtam {
 
@@ -31,7 +33,8 @@ void Undistorter::init(const PinholeIntrinsics& k, const RadTanDistortion& d) {
   identity_ = d.is_zero();
   if (identity_) return;
   const size_t n = static_cast<size_t>(width_) * static_cast<size_t>(height_);
-  taps_.reset(new BilinearTap[n]);
+  tap_index_.reset(new int32_t[n]);
+  for (auto& w : tap_weight_) w.reset(new uint16_t[n]);
   nearest_.reset(new int32_t[n]);
   for (int v = 0; v < height_; ++v) {
     for (int u = 0; u < width_; ++u) {
@@ -47,14 +50,15 @@ void Undistorter::init(const PinholeIntrinsics& k, const RadTanDistortion& d) {
         const int x0 = static_cast<int>(su), y0 = static_cast<int>(sv);
         const long ax = std::lround((su - x0) * kTapOne), ay = std::lround((sv - y0) * kTapOne);
         auto w = [](long a, long b) { return static_cast<uint16_t>(a * b / kTapOne); };
-        BilinearTap& t = taps_[i];
-        t.index = y0 * width_ + x0;
-        t.w[1] = w(ax, kTapOne - ay);
-        t.w[2] = w(kTapOne - ax, ay);
-        t.w[3] = w(ax, ay);
-        t.w[0] = static_cast<uint16_t>(kTapOne - t.w[1] - t.w[2] - t.w[3]);  // sum exactly one
+        tap_index_[i] = y0 * width_ + x0;
+        tap_weight_[1][i] = w(ax, kTapOne - ay);
+        tap_weight_[2][i] = w(kTapOne - ax, ay);
+        tap_weight_[3][i] = w(ax, ay);
+        tap_weight_[0][i] = static_cast<uint16_t>(kTapOne - tap_weight_[1][i] - tap_weight_[2][i] -
+                                                  tap_weight_[3][i]);  // one
       } else {
-        taps_[i] = {0, {0, 0, 0, 0}};  // weights 0: the pixel becomes 0 without a branch
+        tap_index_[i] = 0;  // weights 0: the pixel becomes 0 without a branch
+        for (auto& w : tap_weight_) w[i] = 0;
       }
       const long nu = std::lround(su), nv = std::lround(sv);
       nearest_[i] = (nu >= 0 && nv >= 0 && nu < width_ && nv < height_)
@@ -72,13 +76,32 @@ void Undistorter::undistort_gray(const uint8_t* raw, ImageF* out) const {
     for (int i = 0; i < n; ++i) dst[i] = raw[i] * kToUnit;
     return;
   }
-  // Integer weights (in 1/16384): fewer instructions than float, within 0.05 of a grey level.
+  // Fixed-point weights (in 1/16384), within 0.05 of a grey level; the weighted sums stay below
+  // 2^24, so float computes them exactly. In chunks: the 2x2 source pixels of each output pixel
+  // are copied (two bytes above, two below) in a scalar loop, SSE2 and NEON having no gather,
+  // then weighed in one that vectorises.
   constexpr float kTapToUnit = kToUnit / kTapOne;
-  for (int i = 0; i < n; ++i) {
-    const BilinearTap& t = taps_[i];
-    const uint8_t* p = raw + t.index;
-    const int32_t v = p[0] * t.w[0] + p[1] * t.w[1] + p[width_] * t.w[2] + p[width_ + 1] * t.w[3];
-    dst[i] = static_cast<float>(v) * kTapToUnit;
+  constexpr int kChunk = 256;
+  uint8_t above[2 * kChunk], below[2 * kChunk];
+  for (int start = 0; start < n; start += kChunk) {
+    const int m = std::min(kChunk, n - start);
+    const int32_t* index = tap_index_.get() + start;
+    for (int i = 0; i < m; ++i) {
+      const uint8_t* p = raw + index[i];
+      std::memcpy(above + 2 * i, p, 2);
+      std::memcpy(below + 2 * i, p + width_, 2);
+    }
+    const uint16_t* w0 = tap_weight_[0].get() + start;
+    const uint16_t* w1 = tap_weight_[1].get() + start;
+    const uint16_t* w2 = tap_weight_[2].get() + start;
+    const uint16_t* w3 = tap_weight_[3].get() + start;
+    float* __restrict out_chunk = dst + start;
+    for (int i = 0; i < m; ++i) {
+      const float v =
+          static_cast<float>(above[2 * i]) * w0[i] + static_cast<float>(above[2 * i + 1]) * w1[i] +
+          static_cast<float>(below[2 * i]) * w2[i] + static_cast<float>(below[2 * i + 1]) * w3[i];
+      out_chunk[i] = v * kTapToUnit;
+    }
   }
 }
 

@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include <Eigen/Cholesky>
@@ -42,11 +43,14 @@ struct Projector {
   }
 };
 
-// u, v and 1/z of points x, y, z; u = kInvalid where a point is behind the camera or outside
-// [1, u_max] x [1, v_max].
+// Where points x, y, z project: u (kInvalid where a point is behind the camera or outside
+// [1, u_max] x [1, v_max]), 1/z, the offset of the pixel at the top left of (u, v) in an image
+// `stride_px` wide and (u, v)'s fractions beyond it, the bilinear weights; for a point out of
+// view, those of the nearest pixel in view.
 void project_points(const Projector& P, const float* __restrict X, const float* __restrict Y,
-                    const float* __restrict Z, int n, float u_max, float v_max, float* __restrict u,
-                    float* __restrict v, float* __restrict inverse_z) {
+                    const float* __restrict Z, int n, float u_max, float v_max, float stride_px,
+                    float* __restrict u, float* __restrict inverse_z, int32_t* __restrict offset,
+                    float* __restrict fraction_u, float* __restrict fraction_v) {
   const float r0 = P.r[0], r1 = P.r[1], r2 = P.r[2], r3 = P.r[3], r4 = P.r[4], r5 = P.r[5];
   const float r6 = P.r[6], r7 = P.r[7], r8 = P.r[8], t0 = P.t[0], t1 = P.t[1], t2 = P.t[2];
   const float fx = P.pinhole.fx, fy = P.pinhole.fy, cx = P.pinhole.cx, cy = P.pinhole.cy;
@@ -60,29 +64,51 @@ void project_points(const Projector& P, const float* __restrict X, const float* 
     const bool in_view =
         (qz >= kMinDepthM) & (ui >= 1.f) & (vi >= 1.f) & (ui <= u_max) & (vi <= v_max);
     u[i] = in_view ? ui : kInvalid;
-    v[i] = vi;
     inverse_z[i] = iz;
+    // Clamped into the image without branches (a NaN becomes 0), and in float, which SSE2
+    // converts four at a time: exact below 2^24 pixels. Stored whether in view or not: GCC
+    // does not vectorise a choice of a converted value on aarch64.
+    const float uc = std::min(u_max, std::max(0.f, ui));
+    const float vc = std::min(v_max, std::max(0.f, vi));
+    const float column = static_cast<float>(static_cast<int>(uc));
+    const float row = static_cast<float>(static_cast<int>(vc));
+    offset[i] = static_cast<int32_t>(row * stride_px + column);
+    fraction_u[i] = uc - column;
+    fraction_v[i] = vc - row;
   }
 }
 
-// The geometric residuals from the four inverse depths around each projection: where they
-// agree (no depth edge), the bilinear inverse depth against the point's, in inverse depth or in
-// depth; inverse_sigma 0 marks a point without residual.
+// The 2x2 pixels whose top left is at each offset: a scalar loop (SSE2 and NEON have no
+// gather), without branches; what the points out of view read is masked by their callers.
+void gather_corners(const ImageF& img, const int32_t* __restrict offset, int n,
+                    float* __restrict c00, float* __restrict c01, float* __restrict c10,
+                    float* __restrict c11) {
+  const float* pixels = img.data();
+  const int below = img.width();
+  for (int i = 0; i < n; ++i) {
+    const float* p = pixels + offset[i];
+    c00[i] = p[0];
+    c01[i] = p[1];
+    c10[i] = p[below];
+    c11[i] = p[below + 1];
+  }
+}
+
+// The geometric residuals from the four inverse depths around each projection: where it is in
+// view and they agree (no depth edge), the bilinear inverse depth against the point's, in
+// inverse depth or in depth; inverse_sigma 0 marks a point without residual.
 void geometric_residuals(const float* __restrict c00, const float* __restrict c01,
                          const float* __restrict c10, const float* __restrict c11,
-                         const float* __restrict u, const float* __restrict v,
-                         const float* __restrict inverse_z, int n, bool inverse, float sigma_rho,
-                         float* __restrict residual, float* __restrict inverse_sigma) {
+                         const float* __restrict u, const float* __restrict fraction_u,
+                         const float* __restrict fraction_v, const float* __restrict inverse_z,
+                         int n, bool inverse, float sigma_rho, float* __restrict residual,
+                         float* __restrict inverse_sigma) {
   for (int i = 0; i < n; ++i) {
     const float a = c00[i], b = c01[i], c = c10[i], d = c11[i];
     const float lo = std::min(std::min(a, b), std::min(c, d));
     const float hi = std::max(std::max(a, b), std::max(c, d));
-    const bool ok = (lo > 0.f) & (lo >= kDepthAgreement * hi);
-    const float ax = u[i] - static_cast<float>(static_cast<int>(u[i]));
-    const float ay = v[i] - static_cast<float>(static_cast<int>(v[i]));
-    const float top = a + ax * (b - a);
-    const float bottom = c + ax * (d - c);
-    const float rho = top + ay * (bottom - top);  // sample_bilinear
+    const bool ok = (u[i] != kInvalid) & (lo > 0.f) & (lo >= kDepthAgreement * hi);
+    const float rho = bilinear(a, b, c, d, fraction_u[i], fraction_v[i]);
     const float depth = 1.f / rho;
     const float r = inverse ? inverse_z[i] - rho : 1.f / inverse_z[i] - depth;
     // sigma_z = z^2 sigma_d / (f b) for the depth residual
@@ -112,36 +138,50 @@ double sum_padded(const float* v, int n_padded) {
   return total;
 }
 
-float dot_lanes(const float* a, const float* b, int n) {
-  float lane[kLanes] = {};
-  for (int i = 0; i < n; i += kLanes) {
-    for (int l = 0; l < kLanes; ++l) lane[l] += a[i + l] * b[i + l];
-  }
-  return (lane[0] + lane[1]) + (lane[2] + lane[3]);
+// Four floats, one SSE2 or NEON register; GCC and Clang lower the arithmetic to either.
+using Lanes = float __attribute__((vector_size(16)));
+static_assert(sizeof(Lanes) == kLanes * sizeof(float), "one lane per partial sum");
+
+Lanes load_lanes(const float* p) {
+  Lanes v;
+  std::memcpy(&v, p, sizeof(v));  // unaligned
+  return v;
 }
 
+double fold_lanes(Lanes v) { return (v[0] + v[1]) + (v[2] + v[3]); }
+
 // Normal equations sum_i w_i J_i J_i^T and sum_i b_i J_i over the points' keyframe-side
-// Jacobians (structure of arrays): per block of points, 27 dot products that vectorise (one pass
-// per row, up to 7 sums each, counted 2.3 times the instructions: GCC left it scalar).
+// Jacobians (structure of arrays), in one pass: each point's eight values are loaded once into
+// 27 running sums (21 of H, 6 of g), which a 32-register NEON core keeps in registers; a dot
+// product per sum would load each row up to seven times, and the A72 has one load pipe. Lane by
+// lane the sums are the dot products' (float within a block, double across blocks).
 void add_normal_equations(const TrackPoints& pts, const float* w, const float* b, double scale,
                           Eigen::Matrix<double, 6, 6>* H, Vector6d* g) {
-  static_assert(kLanes == 4, "dot_lanes folds four lanes");
   const int n = pts.padded_size();
-  float wJ[6][kSumBlock];
+  const float* J[6];
+  for (int r = 0; r < 6; ++r) J[r] = pts.J(r);
   for (int start = 0; start < n; start += kSumBlock) {
-    const int m = std::min(kSumBlock, n - start);
-    const float* J[6];
-    for (int r = 0; r < 6; ++r) {
-      J[r] = pts.J(r) + start;
-      for (int i = 0; i < m; ++i) wJ[r][i] = w[start + i] * J[r][i];
+    const int end = std::min(start + kSumBlock, n);
+    Lanes h[21] = {}, gl[6] = {};
+    for (int i = start; i < end; i += kLanes) {
+      Lanes j[6];
+      for (int r = 0; r < 6; ++r) j[r] = load_lanes(J[r] + i);
+      const Lanes wi = load_lanes(w + i), bi = load_lanes(b + i);
+      int k = 0;
+      for (int r = 0; r < 6; ++r) {
+        const Lanes wj = wi * j[r];
+        for (int c = r; c < 6; ++c) h[k++] += wj * j[c];
+        gl[r] += bi * j[r];
+      }
     }
+    int k = 0;
     for (int r = 0; r < 6; ++r) {
       for (int c = r; c < 6; ++c) {
-        const double v = scale * dot_lanes(wJ[r], J[c], m);
+        const double v = scale * fold_lanes(h[k++]);
         (*H)(r, c) += v;
         if (c != r) (*H)(c, r) += v;
       }
-      (*g)(r) += scale * dot_lanes(b + start, J[r], m);
+      (*g)(r) += scale * fold_lanes(gl[r]);
     }
   }
 }
@@ -186,12 +226,14 @@ void Tracker::allocate(const Keyframe& model, const TrackerOptions& opt) {
     n = std::max(n, model.geometric[l].capacity());
   }
   n = TrackPoints::round_up(n, TrackPoints::kBlock);
-  for (auto* buffer : {&proj_u_, &proj_v_, &proj_inverse_z_, &ph_sample_, &ph_residual_,
-                       &geo_residual_, &geo_inverse_sigma_, &corners_[0], &corners_[1],
-                       &corners_[2], &corners_[3], &row_weight_[0], &row_weight_[1],
-                       &row_residual_[0], &row_residual_[1], &point_cost_, &scratch_}) {
+  for (auto* buffer :
+       {&proj_u_, &proj_fraction_u_, &proj_fraction_v_, &proj_inverse_z_, &ph_sample_,
+        &ph_residual_, &geo_residual_, &geo_inverse_sigma_, &corners_[0], &corners_[1],
+        &corners_[2], &corners_[3], &row_weight_[0], &row_weight_[1], &row_residual_[0],
+        &row_residual_[1], &point_cost_, &scratch_}) {
     buffer->reset(new float[static_cast<size_t>(n)]());
   }
+  proj_offset_.reset(new int32_t[static_cast<size_t>(n)]());
 }
 
 void Tracker::project(const TrackPoints& pts, const PinholeIntrinsics& k, int width_px,
@@ -200,19 +242,36 @@ void Tracker::project(const TrackPoints& pts, const PinholeIntrinsics& k, int wi
   // In view with the 1-px margin that bilinear sampling needs (Image::contains).
   const float u_max = static_cast<float>(width_px - 1) - 1.f;
   const float v_max = static_cast<float>(height_px - 1) - 1.f;
-  project_points(P, pts.x(), pts.y(), pts.z(), pts.padded_size(), u_max, v_max, proj_u_.get(),
-                 proj_v_.get(), proj_inverse_z_.get());
+  project_points(P, pts.x(), pts.y(), pts.z(), pts.padded_size(), u_max, v_max,
+                 static_cast<float>(width_px), proj_u_.get(), proj_inverse_z_.get(),
+                 proj_offset_.get(), proj_fraction_u_.get(), proj_fraction_v_.get());
   const int n = pts.padded_size();
-  for (int i = pts.size(); i < n; ++i) proj_u_[i] = kInvalid;  // the padding is never in view
+  for (int i = pts.size(); i < n; ++i) {  // the padding is never in view
+    proj_u_[i] = kInvalid;
+    proj_offset_[i] = 0;
+  }
+}
+
+void Tracker::gather(const ImageF& img, int n) {
+  gather_corners(img, proj_offset_.get(), n, corners_[0].get(), corners_[1].get(),
+                 corners_[2].get(), corners_[3].get());
 }
 
 void Tracker::sample_photometric(const TrackPoints& pts, const ImageF& img) {
-  const float* u = proj_u_.get();
-  const float* v = proj_v_.get();
-  float* sample = ph_sample_.get();
   const int n = pts.padded_size();
-  for (int i = 0; i < n; ++i)
-    sample[i] = u[i] == kInvalid ? kInvalid : sample_bilinear(img, u[i], v[i]);
+  gather(img, n);
+  const float* u = proj_u_.get();
+  const float* fraction_u = proj_fraction_u_.get();
+  const float* fraction_v = proj_fraction_v_.get();
+  const float* c00 = corners_[0].get();
+  const float* c01 = corners_[1].get();
+  const float* c10 = corners_[2].get();
+  const float* c11 = corners_[3].get();
+  float* __restrict sample = ph_sample_.get();
+  for (int i = 0; i < n; ++i) {
+    const float s = bilinear(c00[i], c01[i], c10[i], c11[i], fraction_u[i], fraction_v[i]);
+    sample[i] = u[i] == kInvalid ? kInvalid : s;
+  }
 }
 
 void Tracker::estimate_gain_brightness(const TrackPoints& pts) {
@@ -274,31 +333,13 @@ void Tracker::update_scales(int level, int n_ph, int n_geo) {
 }
 
 void Tracker::sample_geometric(const TrackPoints& pts, const ImageF& idepth) {
-  const float* u = proj_u_.get();
-  const float* v = proj_v_.get();
   const int n = pts.padded_size();
-  // The four neighbours of every projection, gathered in a scalar loop (SSE2 and NEON have no
-  // gather), then tested and interpolated in one that vectorises. Out of view: all 0.
-  float* __restrict c00 = corners_[0].get();
-  float* __restrict c01 = corners_[1].get();
-  float* __restrict c10 = corners_[2].get();
-  float* __restrict c11 = corners_[3].get();
-  for (int i = 0; i < n; ++i) {
-    if (u[i] == kInvalid) {
-      c00[i] = c01[i] = c10[i] = c11[i] = 0.f;
-      continue;
-    }
-    const float* r0 = idepth.row(static_cast<int>(v[i])) + static_cast<int>(u[i]);
-    const float* r1 = r0 + idepth.width();
-    c00[i] = r0[0];
-    c01[i] = r0[1];
-    c10[i] = r1[0];
-    c11[i] = r1[1];
-  }
-  geometric_residuals(c00, c01, c10, c11, u, v, proj_inverse_z_.get(), n,
-                      opt_.residuals.geometric == GeometricMode::kInverseDepth,
-                      static_cast<float>(opt_.inverse_depth_sigma), geo_residual_.get(),
-                      geo_inverse_sigma_.get());
+  gather(idepth, n);
+  geometric_residuals(
+      corners_[0].get(), corners_[1].get(), corners_[2].get(), corners_[3].get(), proj_u_.get(),
+      proj_fraction_u_.get(), proj_fraction_v_.get(), proj_inverse_z_.get(), n,
+      opt_.residuals.geometric == GeometricMode::kInverseDepth,
+      static_cast<float>(opt_.inverse_depth_sigma), geo_residual_.get(), geo_inverse_sigma_.get());
 }
 
 int Tracker::weigh(const TrackPoints& pts, bool geometric) {

@@ -70,11 +70,10 @@ class Undistorter {
 
  private:
   static constexpr int kTapOne = 1 << 14;  // fixed-point 1 of the bilinear weights
-  struct BilinearTap {
-    int32_t index;  // top-left source pixel (0 with zero weights when outside)
-    uint16_t w[4];  // weights of the top-left, top-right, bottom-left, bottom-right pixels
-  };
-  std::unique_ptr<BilinearTap[]> taps_;
+  // Per output pixel: its top-left source pixel (0 with zero weights when outside) and the
+  // weights of the top-left, top-right, bottom-left and bottom-right pixels.
+  std::unique_ptr<int32_t[]> tap_index_;
+  std::unique_ptr<uint16_t[]> tap_weight_[4];
   std::unique_ptr<int32_t[]> nearest_;
   int width_ = 0, height_ = 0;
   bool identity_ = true;

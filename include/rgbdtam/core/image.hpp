@@ -46,17 +46,22 @@ using ImageF = Image<float>;
 using ImageU8 = Image<uint8_t>;
 using ImageU16 = Image<uint16_t>;
 
+// The value at fractions ax, ay (in [0, 1)) between four pixels c00, c01 (the row above) and
+// c10, c11.
+inline float bilinear(float c00, float c01, float c10, float c11, float ax, float ay) {
+  const float top = c00 + ax * (c01 - c00);
+  const float bottom = c10 + ax * (c11 - c10);
+  return top + ay * (bottom - top);
+}
+
 // Bilinear sample; the caller guarantees 0 <= x < w-1 and 0 <= y < h-1.
 inline float sample_bilinear(const ImageF& img, float x, float y) {
   const int x0 = static_cast<int>(x);
   const int y0 = static_cast<int>(y);
-  const float ax = x - static_cast<float>(x0);
-  const float ay = y - static_cast<float>(y0);
   const float* r0 = img.row(y0) + x0;
   const float* r1 = r0 + img.width();
-  const float top = r0[0] + ax * (r0[1] - r0[0]);
-  const float bottom = r1[0] + ax * (r1[1] - r1[0]);
-  return top + ay * (bottom - top);
+  return bilinear(r0[0], r0[1], r1[0], r1[1], x - static_cast<float>(x0),
+                  y - static_cast<float>(y0));
 }
 
 // Packed 8-bit RGB to grey with ITU-R BT.601 luma, rounded: the weights of the benchmark's grey

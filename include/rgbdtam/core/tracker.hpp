@@ -203,6 +203,7 @@ class Tracker {
                const SE3& T_c_k);
   void sample_photometric(const TrackPoints& pts, const ImageF& img);
   void sample_geometric(const TrackPoints& pts, const ImageF& inv_depth);
+  void gather(const ImageF& img, int n);  // corners_ at proj_offset_
   void estimate_gain_brightness(const TrackPoints& pts);
   float mad_sigma(int count);
   void update_scales(int level, int n_photometric, int n_geometric);
@@ -215,10 +216,13 @@ class Tracker {
   TrackerOptions opt_;
   const TrackPoints no_points_{};  // stands in for the geometric set without depth
   // Per-point scratch, indexed like the keyframe's point sets, padded like them.
-  std::unique_ptr<float[]> proj_u_, proj_v_, proj_inverse_z_;
+  std::unique_ptr<float[]> proj_u_, proj_inverse_z_;
+  // The top-left pixel of each projection in the level, and the bilinear weights beyond it.
+  std::unique_ptr<int32_t[]> proj_offset_;
+  std::unique_ptr<float[]> proj_fraction_u_, proj_fraction_v_;
   std::unique_ptr<float[]> ph_sample_, ph_residual_, geo_residual_;
   std::unique_ptr<float[]> geo_inverse_sigma_;  // 0 where a point has no residual
-  std::unique_ptr<float[]> corners_[4];         // inverse depths around each projection
+  std::unique_ptr<float[]> corners_[4];         // the pixels around each projection
   // The normal equations' rows of each term at the last measured evaluation, and the costs.
   std::unique_ptr<float[]> row_weight_[2], row_residual_[2], point_cost_;
   std::unique_ptr<float[]> scratch_;  // medians
