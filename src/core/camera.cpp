@@ -54,8 +54,9 @@ void Undistorter::init(const PinholeIntrinsics& k, const RadTanDistortion& d) {
         tap_weight_[1][i] = w(ax, kTapOne - ay);
         tap_weight_[2][i] = w(kTapOne - ax, ay);
         tap_weight_[3][i] = w(ax, ay);
+        // The four weights sum to exactly one.
         tap_weight_[0][i] = static_cast<uint16_t>(kTapOne - tap_weight_[1][i] - tap_weight_[2][i] -
-                                                  tap_weight_[3][i]);  // one
+                                                  tap_weight_[3][i]);
       } else {
         tap_index_[i] = 0;  // weights 0: the pixel becomes 0 without a branch
         for (auto& w : tap_weight_) w[i] = 0;
