@@ -246,10 +246,8 @@ void Tracker::project(const TrackPoints& pts, const PinholeIntrinsics& k, int wi
                  static_cast<float>(width_px), proj_u_.get(), proj_inverse_z_.get(),
                  proj_offset_.get(), proj_fraction_u_.get(), proj_fraction_v_.get());
   const int n = pts.padded_size();
-  for (int i = pts.size(); i < n; ++i) {  // the padding is never in view
-    proj_u_[i] = kInvalid;
-    proj_offset_[i] = 0;
-  }
+  // The padding is never in view (its offsets, clamped, are in the image like any other).
+  for (int i = pts.size(); i < n; ++i) proj_u_[i] = kInvalid;
 }
 
 void Tracker::gather(const ImageF& img, int n) {

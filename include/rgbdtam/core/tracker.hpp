@@ -216,7 +216,8 @@ class Tracker {
   TrackerOptions opt_;
   const TrackPoints no_points_{};  // stands in for the geometric set without depth
   // Per-point scratch, indexed like the keyframe's point sets, padded like them.
-  std::unique_ptr<float[]> proj_u_, proj_inverse_z_;
+  std::unique_ptr<float[]> proj_u_;  // kInvalid marks a point out of view
+  std::unique_ptr<float[]> proj_inverse_z_;
   // The top-left pixel of each projection in the level, and the bilinear weights beyond it.
   std::unique_ptr<int32_t[]> proj_offset_;
   std::unique_ptr<float[]> proj_fraction_u_, proj_fraction_v_;
