@@ -33,7 +33,6 @@ struct LocalMap {
 };
 
 using KeyframeOrderQueue = SpscRing<KeyframeOrder>;
-using ClockFn = int64_t (*)();
 
 class KeyframeBuildTask {
  public:

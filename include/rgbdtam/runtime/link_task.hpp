@@ -13,8 +13,6 @@
 
 namespace rgbdtam {
 
-using ClockFn = int64_t (*)();
-
 class LinkTask {
  public:
   void init(const PoseLinkConfig& config, ByteLink* link, int queue_slots, ClockFn clock);

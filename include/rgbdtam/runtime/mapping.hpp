@@ -40,8 +40,6 @@ class MapSink {
                                const FixedVector<FusedPixel>& pixels) = 0;
 };
 
-using ClockFn = int64_t (*)();
-
 struct MappingCounters {
   uint32_t keyframes_mapped = 0;
   uint32_t frames_observed = 0;

@@ -9,6 +9,7 @@
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
+#include <cstdint>
 #include <mutex>
 #include <thread>
 
@@ -16,6 +17,9 @@
 #include "rgbdtam/runtime/thread_placement.hpp"
 
 namespace rgbdtam {
+
+// The modules' clock (steady, ns), injected so that tests can drive time.
+using ClockFn = int64_t (*)();
 
 // Synchronous mode: every queued item, in order, on the caller's thread. Returns how many.
 template <typename Item, typename Module>
