@@ -103,7 +103,8 @@ for line in sys.stdin:
 if start is not None:
     ranges.append((start, end))
 print(",".join("0x%x+0x%x" % (a, b - a) for a, b in ranges))')
-module_cycles() {  # $1: frames; prints "<module> <cycles> <instructions>" lines and "keyframes <n>"
+module_cycles() {  # $1: frames; prints "<module> <cycles> <instructions>" lines and "keyframes <n>",
+  # and writes "<module> <cycles> <function>" lines to $work/fn.$1
   qemu-aarch64 -L "$sysroot" -d in_asm,exec,nochain -dfilter "$code" "$arm" "${module_args[@]}" \
     --max-frames "$1" --json 2>&1 >"$work/json" | awk -v entries="$entries" -f tools/aarch64_cost/tb_counts.awk |
     awk -v unique="$work/tb" '{key = $3; for (i = 4; i <= NF; i++) key = key " " $i
@@ -119,9 +120,11 @@ module_cycles() {  # $1: frames; prints "<module> <cycles> <instructions>" lines
          /\.text/ {next} {print}' | sed '$d' > "$work/tb.s"
   llvm-mca -mtriple=aarch64 -mcpu=cortex-a72 -iterations=100 "$work/tb.s" 2>/dev/null |
     awk '/Code Region - tb/ {id = substr($NF, 3)} /^Total Cycles:/ {print id, $3 / 100}' > "$work/cycles"
-  awk 'FILENAME == ARGV[1] {c[$1] = $2; next} FILENAME == ARGV[2] {size[FNR] = $1; next}
-       {cycles[$1] += $2 * c[$3]; n[$1] += $2 * size[$3]}
-       END {for (m in cycles) printf "%s %.0f %.0f\n", m, cycles[m], n[m]}' \
+  awk -v by_function="$work/fn.$1" '
+       FILENAME == ARGV[1] {c[$1] = $2; next} FILENAME == ARGV[2] {size[FNR] = $1; sym[FNR] = $2; next}
+       {cycles[$1] += $2 * c[$3]; n[$1] += $2 * size[$3]; f[$1 " " sym[$3]] += $2 * c[$3]}
+       END {for (m in cycles) printf "%s %.0f %.0f\n", m, cycles[m], n[m]
+            for (k in f) {split(k, mk, " "); printf "%s %.0f %s\n", mk[1], f[k], mk[2] > by_function}}' \
     "$work/cycles" "$work/tb" "$work/owned"
   echo "keyframes $(sed -E 's/.*"keyframes": ([0-9]+).*/\1/' "$work/json")"
 }
@@ -150,3 +153,16 @@ awk -v f="$frames" 'FILENAME == ARGV[1] {c0[$1] = $2; n0[$1] = $3; next}
   }
   printf "tools/task_sim.py --scale %s\n", scale
 }' "$work/m0" "$work/m1" "$work/host"
+# Where each module's cycles go: its functions over the same frames (run of 2 + frames minus run
+# of 2), the largest first, with what share of the module they are.
+k=$(( $(awk '$1 == "keyframes" {print $2}' "$work/m1") - $(awk '$1 == "keyframes" {print $2}' "$work/m0") ))
+echo "the largest functions of each module, M cycles per frame (tracker) or per keyframe (the rest):"
+awk -v f="$frames" -v k="$k" 'FILENAME == ARGV[1] {c0[$1 " " $3] = $2; next}
+     {d = $2 - c0[$1 " " $3]; if (d > 0) {fc[$1 " " $3] = d; total[$1] += d}}
+     END {for (key in fc) {split(key, mk, " "); per = (mk[1] == "tracker") ? f : k
+            if (per > 0) printf "%s %.2f %.0f %s\n", mk[1], fc[key] / per / 1e6, 100 * fc[key] / total[mk[1]], mk[2]}}' \
+  "$work/fn.2" "$work/fn.$((2 + frames))" | c++filt |
+  sed -E 's/\(anonymous namespace\)/{anonymous}/g; s/\(.*//' | sort -k1,1 -k2,2nr |
+  awk '$1 != "-" && $1 != "sensor" && ++shown[$1] <= 8 {
+         name = $0; sub(/^[^ ]+ [^ ]+ [^ ]+ /, "", name)
+         printf "  %-8s %6.2f M %3d %%  %s\n", $1, $2, $3, name}'

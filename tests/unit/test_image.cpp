@@ -1,7 +1,9 @@
 // Pyramid construction, gradients and the Canny detector.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "rgbdtam/core/canny.hpp"
 #include "rgbdtam/core/pyramid.hpp"
@@ -60,6 +62,52 @@ TEST(Pyramid, InverseDepthRangeAndEdges) {
   }
   p.clear_depth();
   EXPECT_FALSE(p.has_depth());
+}
+
+// Every coarse inverse depth against the rule written plainly: a 2x2 block with at least two
+// valid values whose smallest is at least 0.9 of its largest is their mean, else none. Depths
+// within 20 % of each other put many blocks on both sides of the 0.9.
+TEST(Pyramid, InverseDepthBlocksFollowTheAgreementRule) {
+  FramePyramid p;
+  p.allocate(kK, 5000.0, DepthRange{0.3, 5.0});
+  ImageU16 depth;
+  depth.allocate(640, 480);
+  uint32_t state = 7;
+  for (int y = 0; y < 480; ++y)
+    for (int x = 0; x < 640; ++x) {
+      state = state * 1664525u + 1013904223u;
+      const uint32_t r = state >> 8;
+      depth.at(x, y) = r % 10 < 2    ? 0
+                       : r % 10 == 2 ? 60000
+                                     : static_cast<uint16_t>(5000 + r % 1200);
+    }
+  p.build_inverse_depth(depth);
+  int averaged = 0, refused = 0;
+  for (int l = 1; l < kPyramidLevels; ++l) {
+    const ImageF& fine = p.inverse_depth(l - 1);
+    const ImageF& coarse = p.inverse_depth(l);
+    for (int y = 0; y < coarse.height(); ++y)
+      for (int x = 0; x < coarse.width(); ++x) {
+        const float v[4] = {fine.at(2 * x, 2 * y), fine.at(2 * x + 1, 2 * y),
+                            fine.at(2 * x, 2 * y + 1), fine.at(2 * x + 1, 2 * y + 1)};
+        int n = 0;
+        float lo = 1e30f, hi = 0.f, sum = 0.f;
+        for (const float d : v) {
+          sum += d;
+          hi = std::max(hi, d);
+          if (d > 0.f) {
+            ++n;
+            lo = std::min(lo, d);
+          }
+        }
+        const bool agree = n >= 2 && lo >= 0.9f * hi;
+        (agree ? averaged : refused) += 1;
+        ASSERT_EQ(coarse.at(x, y), agree ? sum / n : 0.f)
+            << "level " << l << " at " << x << ", " << y;
+      }
+  }
+  EXPECT_GT(averaged, 1000);
+  EXPECT_GT(refused, 1000);
 }
 
 TEST(Gradients, CentralDifferencesOfARamp) {
