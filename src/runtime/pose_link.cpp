@@ -24,8 +24,11 @@ void PoseLink::init(const PoseLinkConfig& config, ByteLink* link) {
   encoder_ = mavlink::Encoder(config.system_id, config.component_id);
 }
 
+// A clock that moved further than this between two measurements jumped (was set, or restarted):
+// no round trip that passes the filter is that long.
+constexpr int64_t kClockJumpNs = 1'000'000'000;
+
 void PoseLink::set_time_base(int64_t sensor_ns, int64_t arrival_ns) {
-  constexpr int64_t kClockJumpNs = 1'000'000'000;
   const int64_t base = sensor_ns - arrival_ns;
   if (time_base_set_ && std::llabs(base - sensor_minus_now_ns_) > kClockJumpNs) {
     peer_.clock_known = false;
@@ -311,7 +314,12 @@ void PoseLink::on_frame(const mavlink::Frame& f, int64_t now_ns) {
       }
       if (round_trip > 2 * peer_.best_round_trip_ns) return;  // delayed: its offset is not
       const int64_t offset = t.tc1 - (t.ts1 + round_trip / 2);
-      peer_.clock_offset_ns = !peer_.clock_known
+      // An autopilot that rebooted restarts its clock: smoothing towards it would stamp its
+      // attitudes wrongly for tens of seconds, so a jump is taken at once.
+      const bool jumped =
+          peer_.clock_known && std::llabs(offset - peer_.clock_offset_ns) > kClockJumpNs;
+      peer_.clock_jumps += jumped ? 1 : 0;
+      peer_.clock_offset_ns = !peer_.clock_known || jumped
                                   ? offset
                                   : peer_.clock_offset_ns + (offset - peer_.clock_offset_ns) / 5;
       peer_.clock_known = true;

@@ -283,6 +283,37 @@ void hear_and_sync(AutopilotLink* wire, PoseLink* link, int64_t now_ns) {
   ASSERT_EQ(link->peer().clock_offset_ns, kAutopilotAhead);
 }
 
+// Its answer to our latest TIMESYNC, 2 ms after we sent it, from a clock ahead_ns ahead of ours.
+void answer_timesync(AutopilotLink* wire, PoseLink* link, int64_t ahead_ns) {
+  mavlink::Timesync reply;
+  reply.ts1 = wire->sent.timesync.back().ts1;
+  reply.tc1 = reply.ts1 + 1'000'000 + ahead_ns;
+  wire->says(reply);
+  link->tick(reply.ts1 - kSensorAhead + 2'000'000, mavlink::kMavStateActive);
+}
+
+TEST(PoseLink, AClockThatDriftsIsSmoothedOneThatJumpsIsTakenAtOnce) {
+  AutopilotLink wire;
+  PoseLink link;
+  link.init(PoseLinkConfig{}, &wire);
+  start_clocks(&link);
+  hear_and_sync(&wire, &link, 2'000'000'000);
+  const PeerState& peer = link.peer();
+  // 10 ms of drift (or of a slower path) moves the estimate a fifth of the way.
+  link.tick(3'100'000'000, mavlink::kMavStateActive);
+  answer_timesync(&wire, &link, kAutopilotAhead + 10'000'000);
+  EXPECT_EQ(peer.clock_offset_ns, kAutopilotAhead + 2'000'000);
+  EXPECT_EQ(peer.clock_jumps, 0u);
+  // The autopilot rebooted: its clock restarted, 90 s behind where it was. Taken at once, so
+  // that its attitudes are stamped right from the first answer.
+  constexpr int64_t kRebooted = kAutopilotAhead - 90'000'000'000;
+  link.tick(4'200'000'000, mavlink::kMavStateActive);
+  answer_timesync(&wire, &link, kRebooted);
+  EXPECT_EQ(peer.clock_offset_ns, kRebooted);
+  EXPECT_EQ(peer.clock_jumps, 1u);
+  EXPECT_EQ(peer.timesync_replies, 3u);
+}
+
 TEST(PoseLink, TheAutopilotsAttitudeReachesTheTrackerInTheSensorsClockAndItsOriginIsSent) {
   AutopilotLink wire;
   PoseLinkConfig config;

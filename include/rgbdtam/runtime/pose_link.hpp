@@ -68,6 +68,7 @@ struct PeerState {
   uint32_t timesync_answered = 0;  // its TIMESYNC requests we answered
   uint32_t timesync_requests = 0;  // ours to it
   uint32_t timesync_replies = 0;   // its answers to ours
+  uint32_t clock_jumps = 0;        // answers that moved its clock more than a second (a reboot)
   // Its clock minus the clock of our ODOMETRY time_usec, ns, from round trips no longer than
   // twice the shortest seen; valid once an answer was taken (again after our clock jumped).
   bool clock_known = false;
