@@ -269,20 +269,6 @@ constexpr int64_t kSensorAhead = 100'000'000'000, kAutopilotAhead = 2'000'000'00
 void start_clocks(PoseLink* link) {
   link->set_time_base(1'000'000'000 + kSensorAhead, 1'000'000'000);
 }
-// The autopilot's heartbeat at now_ns, then its answer to our TIMESYNC request 2 ms after we
-// sent it.
-void hear_and_sync(AutopilotLink* wire, PoseLink* link, int64_t now_ns) {
-  wire->says(mavlink::Heartbeat{});
-  link->tick(now_ns, mavlink::kMavStateActive);
-  ASSERT_FALSE(wire->sent.timesync.empty());
-  mavlink::Timesync reply;
-  reply.ts1 = wire->sent.timesync.back().ts1;
-  reply.tc1 = reply.ts1 + 1'000'000 + kAutopilotAhead;
-  wire->says(reply);
-  link->tick(reply.ts1 - kSensorAhead + 2'000'000, mavlink::kMavStateActive);
-  ASSERT_EQ(link->peer().clock_offset_ns, kAutopilotAhead);
-}
-
 // Its answer to our latest TIMESYNC, 2 ms after we sent it, from a clock ahead_ns ahead of ours.
 void answer_timesync(AutopilotLink* wire, PoseLink* link, int64_t ahead_ns) {
   mavlink::Timesync reply;
@@ -290,6 +276,16 @@ void answer_timesync(AutopilotLink* wire, PoseLink* link, int64_t ahead_ns) {
   reply.tc1 = reply.ts1 + 1'000'000 + ahead_ns;
   wire->says(reply);
   link->tick(reply.ts1 - kSensorAhead + 2'000'000, mavlink::kMavStateActive);
+}
+
+// The autopilot's heartbeat at now_ns, then its answer to our TIMESYNC request 2 ms after we
+// sent it.
+void hear_and_sync(AutopilotLink* wire, PoseLink* link, int64_t now_ns) {
+  wire->says(mavlink::Heartbeat{});
+  link->tick(now_ns, mavlink::kMavStateActive);
+  ASSERT_FALSE(wire->sent.timesync.empty());
+  answer_timesync(wire, link, kAutopilotAhead);
+  ASSERT_EQ(link->peer().clock_offset_ns, kAutopilotAhead);
 }
 
 TEST(PoseLink, AClockThatDriftsIsSmoothedOneThatJumpsIsTakenAtOnce) {
