@@ -58,7 +58,7 @@ class ReplayJob {
   const std::vector<StampedPose>& final_estimates() const { return final_estimates_; }
   // Of each estimate: the reported pose covariance, (translation, rotation) in the camera.
   const std::vector<Eigen::Matrix<double, 6, 6>>& covariances() const { return covariances_; }
-  const TrackingCounters& counters() const { return system_.tracking().counters(); }
+  TrackingCounters counters() const { return system_.tracking().counters(); }
   const LatencyStats& tracking_time() const { return tracking_ms_; }
   const LatencyStats& frame_time() const { return frame_ms_; }
   const TumReplaySource& source() const { return source_; }

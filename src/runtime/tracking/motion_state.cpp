@@ -1,0 +1,82 @@
+#include "rgbdtam/runtime/tracking/motion_state.hpp"
+
+#include "rgbdtam/runtime/messages.hpp"
+
+namespace rgbdtam {
+namespace {
+// A velocity estimated across a longer gap (a loss, dropped frames) is not a velocity.
+constexpr int64_t kMaxVelocityGapNs = 200'000'000;
+}  // namespace
+
+void MotionState::init(bool motion_model, int64_t reset_after_lost_ns) {
+  motion_model_ = motion_model;
+  reset_after_lost_ns_ = reset_after_lost_ns;
+}
+
+HealthContext MotionState::context(const SE3& T_w_c, int64_t t_ns, double typical_sigma) const {
+  HealthContext context;
+  context.typical_sigma = typical_sigma;
+  if (has_last_ && t_ns > last_ns_) {
+    context.T_last_current = T_w_last_.inverse() * T_w_c;
+    context.dt_s = seconds_since_last(t_ns);
+  }
+  return context;
+}
+
+void MotionState::begin(const SE3& T_w_c, int64_t t_ns) {
+  T_w_last_ = T_w_c;
+  last_ns_ = t_ns;
+  has_last_ = true;
+  velocity_.setZero();
+}
+
+void MotionState::track(const SE3& T_w_c, int64_t t_ns, bool continuous) {
+  const int64_t gap = t_ns - last_ns_;
+  velocity_.setZero();
+  if (motion_model_ && continuous && has_last_ && gap > 0 && gap <= kMaxVelocityGapNs) {
+    velocity_ = (T_w_last_.inverse() * T_w_c).log() / (static_cast<double>(gap) * 1e-9);
+  }
+  T_w_last_ = T_w_c;
+  last_ns_ = t_ns;
+  has_last_ = true;
+  lost_since_ns_ = -1;
+}
+
+int64_t MotionState::lost_for_ns(int64_t t_ns) {
+  // Counted from the first lost frame: after an outage of the sensor the frames that follow
+  // are relocalisation's chances, not lost time already spent.
+  if (lost_since_ns_ < 0) lost_since_ns_ = t_ns;
+  return t_ns - lost_since_ns_;
+}
+
+void MotionState::restart(int64_t t_ns) {
+  lost_since_ns_ = -1;
+  last_ns_ = t_ns;
+  velocity_.setZero();
+  ++reset_counter_;
+  ++counters_.resets;
+}
+
+void MotionState::correct(const SE3& delta, double max_reported_jump_m,
+                          double max_reported_jump_rad) {
+  const SE3 before = T_w_last_;
+  T_w_last_ = delta * T_w_last_;
+  // Poses either side of a large jump are not comparable: as after a restart, none is
+  // reported over the window in which a consumer differences poses.
+  const SE3 jump = before.inverse() * T_w_last_;
+  if (jump.translation().norm() > max_reported_jump_m ||
+      so3_log(jump.quaternion()).norm() > max_reported_jump_rad) {
+    withhold_until_ns_ = last_ns_ + reset_after_lost_ns_;
+  }
+  ++reset_counter_;
+  ++counters_.loop_corrections;
+  correction_flags_ |= kLoopCorrected | kReset;
+}
+
+uint32_t MotionState::take_correction_flags() {
+  const uint32_t flags = correction_flags_;
+  correction_flags_ = 0;
+  return flags;
+}
+
+}  // namespace rgbdtam
