@@ -68,14 +68,15 @@ rows=(
   "corridor $cache/corridor $cache/corridor/camera.conf"
   "plain_room $cache/plain_room $cache/plain_room/camera.conf"
 )
-printf '| %-18s | %6s | %7s | %8s | %11s | %5s | %7s | %6s | %9s | %8s | %6s |\n' sequence frames "ATE cm" coverage false-valid lost retried resets keyframes "track ms" "p95 ms"
-printf '|%s|%s|%s|%s|%s|%s|%s|%s|%s|%s|%s|\n' -------------------- -------- --------- ---------- ------------- ------- --------- -------- ----------- ---------- --------
+printf '| %-18s | %6s | %7s | %8s | %11s | %10s | %9s | %5s | %7s | %6s | %9s | %8s | %6s |\n' sequence frames "ATE cm" coverage false-valid misleading "NEES mean" lost retried resets keyframes "track ms" "p95 ms"
+printf '|%s|%s|%s|%s|%s|%s|%s|%s|%s|%s|%s|%s|%s|\n' -------------------- -------- --------- ---------- ------------- ------------ ----------- ------- --------- -------- ----------- ---------- --------
 for row in "${rows[@]}"; do
   read -r name dir config <<<"$row"
   json=$("$bin" replay "$dir" --config "$config" --json ${args[@]+"${args[@]}"} 2>/dev/null)
   field() { printf '%s' "$json" | sed -E "s/.*\"$1\": \"?([^,\"}]*)\"?.*/\1/"; }
-  printf '| %-18s | %6s | %7.2f | %7.1f%% | %5s of %3s | %5s | %7s | %6s | %4s (+%s) | %8.2f | %6.2f |\n' \
+  printf '| %-18s | %6s | %7.2f | %7.1f%% | %5s of %3s | %10s | %9s | %5s | %7s | %6s | %4s (+%s) | %8.2f | %6.2f |\n' \
     "$name" "$(field frames)" "$(field ate_rmse_cm)" "$(awk "BEGIN{print 100*$(field coverage)}")" \
-    "$(field false_valid)" "$(field false_valid_checked)" "$(field lost)" "$(field retried)" "$(field resets)" \
+    "$(field false_valid)" "$(field false_valid_checked)" "$(field misleading)" "$(awk "BEGIN{v=\"$(field nees_mean)\"; if (v+0 == v) printf \"%.2f\", v; else print \"-\"}")" \
+    "$(field lost)" "$(field retried)" "$(field resets)" \
     "$(field keyframes)" "$(field reused)" "$(field track_median_ms)" "$(field track_p95_ms)"
 done

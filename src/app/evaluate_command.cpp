@@ -1,5 +1,7 @@
 #include "evaluate_command.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <string>
@@ -46,6 +48,15 @@ void print_report(const EvaluationReport& r, bool json, const char* label) {
         .number("false_valid_worst_trans_cm", f.worst_translation_m * 100)
         .number("false_valid_worst_rot_deg", f.worst_rotation_deg);
     if (f.count > 0) j.number("false_valid_first_stamp_s", f.first_stamp_s(), 6);
+    if (r.nees.pairs > 0) {
+      j.integer("nees_pairs", r.nees.pairs)
+          .number("nees_mean", r.nees.mean)
+          .number("nees_median", r.nees.median)
+          .number("nees_p99", r.nees.p99)
+          .integer("misleading", r.nees.misleading)
+          .number("misleading_worst_excess_cm", r.nees.worst_excess_m * 100)
+          .number("misleading_worst_excess_deg", r.nees.worst_excess_deg);
+    }
     j.end();
     return;
   }
@@ -77,10 +88,43 @@ void print_report(const EvaluationReport& r, bool json, const char* label) {
   std::printf("\n");
   if (r.nees.pairs > 0) {
     std::printf(
-        "covariance (frame-to-frame NEES, consistent at 6): mean %.2f, median %.2f over %d pairs; "
-        "translation %.2f, rotation %.2f (each consistent at 3)\n",
-        r.nees.mean, r.nees.median, r.nees.pairs, r.nees.mean_translation, r.nees.mean_rotation);
+        "covariance (frame-to-frame NEES, consistent at 6): mean %.2f, median %.2f, 99th "
+        "percentile %.2f over %d pairs; translation %.2f, rotation %.2f (each consistent at 3)\n",
+        r.nees.mean, r.nees.median, r.nees.p99, r.nees.pairs, r.nees.mean_translation,
+        r.nees.mean_rotation);
+    std::printf(
+        "misleading (frame-to-frame error beyond the covariance's 99.99 %% region by > 1 cm or "
+        "> 1 deg): %d of %d; worst beyond it %.2f cm, %.2f deg\n",
+        r.nees.misleading, r.nees.pairs, r.nees.worst_excess_m * 100, r.nees.worst_excess_deg);
   }
+}
+
+// Each estimate's covariance from a `replay --covariance` file, matched by stamp (NaN for an
+// estimate the file does not cover, which the NEES then leaves out).
+Status covariances_of(const char* path, const std::vector<StampedPose>& est,
+                      std::vector<Eigen::Matrix<double, 6, 6>>* out) {
+  std::vector<StampedCovariance> read;
+  int bad = 0;
+  RGBDTAM_RETURN_IF_ERROR(read_tum_covariances(path, &read, &bad));
+  if (bad > 0) std::fprintf(stderr, "rgbdtam eval: skipped %d unreadable lines in %s\n", bad, path);
+  // The files print stamps to the microsecond.
+  constexpr double kSameStampS = 1e-6;
+  out->assign(est.size(), Eigen::Matrix<double, 6, 6>::Constant(NAN));
+  int matched = 0;
+  for (size_t i = 0; i < est.size(); ++i) {
+    const auto at =
+        std::lower_bound(read.begin(), read.end(), est[i].stamp_s - kSameStampS,
+                         [](const StampedCovariance& c, double t) { return c.stamp_s < t; });
+    if (at != read.end() && std::fabs(at->stamp_s - est[i].stamp_s) <= kSameStampS) {
+      (*out)[i] = at->covariance;
+      ++matched;
+    }
+  }
+  if (matched == 0) {
+    return Status::error(StatusCode::kInvalidArgument, "%s: no covariance at an estimate's stamp",
+                         path);
+  }
+  return Status::ok();
 }
 
 int evaluate_command(int argc, char** argv) {
@@ -88,6 +132,7 @@ int evaluate_command(int argc, char** argv) {
   const char* est_path = nullptr;
   const char* frames_path = nullptr;
   const char* plot_path = nullptr;
+  const char* covariance_path = nullptr;
   bool json = false;
   for (int i = 0; i < argc; ++i) {
     if (std::strcmp(argv[i], "--json") == 0) {
@@ -96,6 +141,8 @@ int evaluate_command(int argc, char** argv) {
       frames_path = argv[++i];
     } else if (std::strcmp(argv[i], "--plot") == 0 && i + 1 < argc) {
       plot_path = argv[++i];
+    } else if (std::strcmp(argv[i], "--covariance") == 0 && i + 1 < argc) {
+      covariance_path = argv[++i];
     } else if (argv[i][0] == '-') {
       std::fprintf(stderr, "rgbdtam eval: unknown option '%s'\n", argv[i]);
       return 2;
@@ -111,7 +158,7 @@ int evaluate_command(int argc, char** argv) {
   if (gt_path == nullptr || est_path == nullptr) {
     std::fprintf(stderr,
                  "usage: rgbdtam eval <groundtruth.txt> <estimate.txt> [--json] "
-                 "[--frames rgb.txt] [--plot out.svg]\n");
+                 "[--frames rgb.txt] [--plot out.svg] [--covariance estimate.cov]\n");
     return 2;
   }
   std::vector<StampedPose> gt, est;
@@ -148,7 +195,16 @@ int evaluate_command(int argc, char** argv) {
                  "--frames rgb.txt\n",
                  frames.c_str());
   }
-  const EvaluationReport r = evaluate_all(gt, est, have_frames ? &stamps : nullptr);
+  EvaluationReport r = evaluate_all(gt, est, have_frames ? &stamps : nullptr);
+  if (covariance_path != nullptr) {
+    std::vector<Eigen::Matrix<double, 6, 6>> covariances;
+    const Status read = covariances_of(covariance_path, est, &covariances);
+    if (!read.is_ok()) {
+      std::fprintf(stderr, "rgbdtam eval: --covariance: %s\n", read.message());
+      return 1;
+    }
+    r.nees = evaluate_frame_to_frame_nees(gt, est, covariances);
+  }
   print_report(r, json, "all poses in the file");
   if (plot_path != nullptr && r.ate_ok) {
     PlotInput plot;

@@ -34,7 +34,7 @@ void usage() {
       stderr,
       "usage:\n"
       "  rgbdtam replay <sequence-dir> --config <file> [--trajectory out.txt]\n"
-      "                 [--final-trajectory out.txt] [--map map.ply]\n"
+      "                 [--final-trajectory out.txt] [--covariance out.txt] [--map map.ply]\n"
       "                 [--map-in saved.map] [--map-out saved.map]\n"
       "                 [--set key=value]... [--max-frames N] [--paced] [--trace out.csv]\n"
       "                 [--quiet] [--json]\n"
@@ -221,6 +221,8 @@ int replay_command(int argc, char** argv) {
       options.trajectory_path = argv[++i];
     } else if (std::strcmp(argv[i], "--final-trajectory") == 0 && i + 1 < argc) {
       options.final_trajectory_path = argv[++i];
+    } else if (std::strcmp(argv[i], "--covariance") == 0 && i + 1 < argc) {
+      options.covariance_path = argv[++i];
     } else if (std::strcmp(argv[i], "--map") == 0 && i + 1 < argc) {
       map_path = argv[++i];
     } else if (std::strcmp(argv[i], "--map-in") == 0 && i + 1 < argc) {
@@ -257,10 +259,11 @@ int replay_command(int argc, char** argv) {
   }
   const NamedOutput outputs[] = {{"--trajectory", options.trajectory_path},
                                  {"--final-trajectory", options.final_trajectory_path},
+                                 {"--covariance", options.covariance_path},
                                  {"--map", map_path},
                                  {"--map-out", options.map_out_path},
                                  {"--trace", options.trace_path}};
-  if (outputs_clash(outputs, 5, options.params, c.config, options.sequence, options.map_in_path)) {
+  if (outputs_clash(outputs, 6, options.params, c.config, options.sequence, options.map_in_path)) {
     return 2;
   }
   if (options.trace_path != nullptr &&

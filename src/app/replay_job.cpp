@@ -58,6 +58,10 @@ Status ReplayJob::init(const ReplayOptions& options) {
   if (options.trajectory_path != nullptr) {
     RGBDTAM_RETURN_IF_ERROR(writer_.open(options.trajectory_path));
   }
+  if (options.covariance_path != nullptr) {
+    RGBDTAM_RETURN_IF_ERROR(
+        covariance_writer_.open(options.covariance_path, TrajectoryContent::kCovariance));
+  }
   const size_t frames = static_cast<size_t>(source_.frame_count());
   reserve_touched(&estimates_, frames, StampedPose{0.0, SE3()});
   reserve_touched(&covariances_, frames, Eigen::Matrix<double, 6, 6>::Zero().eval());
@@ -112,6 +116,7 @@ bool ReplayJob::step() {
                       system_.last_mapper_steps(), system_.last_loop_steps()});
   }
   write_failure_ = writer_.write(last_pose_);
+  if (write_failure_.is_ok()) write_failure_ = covariance_writer_.write(last_pose_);
   const double t_s = static_cast<double>(last_pose_.timestamp_ns) * 1e-9;
   if ((last_pose_.flags & kPoseValid) != 0) {
     if (found_in_map_at_frame_ < 0 && loaded_map_.places > 0)
@@ -140,6 +145,7 @@ Status ReplayJob::finish() {
   system_.finish();
   finished_ns_ = monotonic_ns();
   Status closed = writer_.close();
+  if (closed.is_ok()) closed = covariance_writer_.close();
   final_estimates_.clear();
   for (const OnKeyframe& f : on_keyframes_) {
     SE3 T_w_k;
@@ -303,7 +309,10 @@ void ReplayJob::print_json(const EvaluationReport& r) const {
       .integer("depth_not_surface", c.depth_not_surface)
       .number("nees_mean", r.nees.pairs > 0 ? r.nees.mean : NAN)
       .number("nees_median", r.nees.pairs > 0 ? r.nees.median : NAN)
+      .number("nees_p99", r.nees.pairs > 0 ? r.nees.p99 : NAN)
       .integer("nees_pairs", r.nees.pairs)
+      .integer("misleading", r.nees.misleading)
+      .integer("ambiguous", c.ambiguous)
       .end();
 }
 

@@ -18,6 +18,8 @@ namespace rgbdtam {
 struct ReplayOptions {
   const char* sequence = nullptr;
   const char* trajectory_path = nullptr;  // optional
+  // Optional: the covariance sent with each pose of the trajectory (rgbdtam eval --covariance).
+  const char* covariance_path = nullptr;
   // Optional: every tracked frame again at the end, placed on its keyframe as the final map
   // has it (after loop closures), as offline SLAM evaluations report.
   const char* final_trajectory_path = nullptr;
@@ -76,6 +78,7 @@ class ReplayJob {
   Vocabulary vocabulary_;  // before system_, which refers to it
   SlamSystem system_;
   TrajectoryWriter writer_;
+  TrajectoryWriter covariance_writer_;
   std::vector<StampedPose> estimates_;                    // reserved for every frame at init
   std::vector<Eigen::Matrix<double, 6, 6>> covariances_;  // the same
   struct OnKeyframe {

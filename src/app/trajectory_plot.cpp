@@ -19,6 +19,7 @@ constexpr const char* kTruthColour = "#555555";
 constexpr const char* kEstimateColour = "#1f6fd1";
 constexpr const char* kLostColour = "#f39c12";
 constexpr const char* kFalseValidColour = "#d62728";
+constexpr const char* kMisleadingColour = "#9467bd";
 
 std::string format(const char* fmt, ...) __attribute__((format(printf, 1, 2)));
 std::string format(const char* fmt, ...) {
@@ -214,8 +215,9 @@ std::string trajectory_svg(const PlotInput& in) {
       "scale)",
       report.ate.rmse_m * 100, report.ate.compared);
   if (report.has_coverage) svg += format("; coverage %.1f %%", 100 * report.coverage.fraction());
-  svg += format("; false-valid %d of %d; lost stretches %zu</text>\n", report.false_valid.count,
-                report.false_valid.checked, lost.size());
+  svg += format("; false-valid %d of %d", report.false_valid.count, report.false_valid.checked);
+  if (report.nees.pairs > 0) svg += format("; misleading %d", report.nees.misleading);
+  svg += format("; lost stretches %zu</text>\n", lost.size());
 
   // Top view.
   svg += format(
@@ -304,20 +306,28 @@ std::string trajectory_svg(const PlotInput& in) {
       [&](size_t i) { return inside_any(lost, error_stamps[i - 1], error_stamps[i] + 1e-9); },
       kEstimateColour, 1.2);
 
-  // False-valid poses: in both views.
-  for (double stamp : report.false_valid.stamps_s) {
-    const auto at = std::lower_bound(est_stamps.begin(), est_stamps.end(), stamp);
-    if (at == est_stamps.end()) continue;
-    const size_t i = static_cast<size_t>(at - est_stamps.begin());
-    if (!est_view[i].allFinite()) continue;
-    const double e = error_cm[i] < 0 ? 0 : error_cm[i];
-    svg += format(
-        "<circle class=\"false-valid\" cx=\"%.1f\" cy=\"%.1f\" r=\"4\" fill=\"none\" "
-        "stroke=\"%s\" stroke-width=\"2\"/><circle class=\"false-valid\" cx=\"%.1f\" cy=\"%.1f\" "
-        "r=\"4\" fill=\"none\" stroke=\"%s\" stroke-width=\"2\"/>\n",
-        est_view[i].x(), est_view[i].y(), kFalseValidColour, x(stamp - t0), y(e),
-        kFalseValidColour);
-  }
+  // False-valid poses (circles) and misleading ones (squares): in both views.
+  auto mark = [&](const std::vector<double>& stamps, const char* css, const char* shape,
+                  const char* colour) {
+    for (double stamp : stamps) {
+      const auto at = std::lower_bound(est_stamps.begin(), est_stamps.end(), stamp);
+      if (at == est_stamps.end()) continue;
+      const size_t i = static_cast<size_t>(at - est_stamps.begin());
+      if (!est_view[i].allFinite()) continue;
+      const double e = error_cm[i] < 0 ? 0 : error_cm[i];
+      for (const Eigen::Vector2d& p : {est_view[i], Eigen::Vector2d(x(stamp - t0), y(e))}) {
+        svg += format(shape, css, p.x(), p.y(), colour);
+      }
+    }
+  };
+  mark(report.false_valid.stamps_s, "false-valid",
+       "<circle class=\"%s\" cx=\"%.1f\" cy=\"%.1f\" r=\"4\" fill=\"none\" stroke=\"%s\" "
+       "stroke-width=\"2\"/>\n",
+       kFalseValidColour);
+  mark(report.nees.misleading_stamps_s, "misleading",
+       "<rect class=\"%s\" x=\"%.1f\" y=\"%.1f\" width=\"7\" height=\"7\" fill=\"none\" "
+       "stroke=\"%s\" stroke-width=\"2\" transform=\"translate(-3.5,-3.5)\"/>\n",
+       kMisleadingColour);
   svg += "</g>\n";
 
   // Legend.
@@ -326,7 +336,8 @@ std::string trajectory_svg(const PlotInput& in) {
   for (const auto& [colour, label] :
        {std::make_pair(kTruthColour, "ground truth"), std::make_pair(kEstimateColour, "estimate"),
         std::make_pair(kLostColour, "lost (no pose)"),
-        std::make_pair(kFalseValidColour, "false-valid pose")}) {
+        std::make_pair(kFalseValidColour, "false-valid pose"),
+        std::make_pair(kMisleadingColour, "misleading pose")}) {
     svg += format(
         "<rect x=\"%.0f\" y=\"%.0f\" width=\"18\" height=\"6\" fill=\"%s\"/><text x=\"%.0f\" "
         "y=\"%.0f\">%s</text>\n",

@@ -253,7 +253,7 @@ bool interpolate_pose(const std::vector<StampedPose>& gt, double t, double max_g
 NeesResult evaluate_frame_to_frame_nees(const std::vector<StampedPose>& gt,
                                         const std::vector<StampedPose>& est,
                                         const std::vector<Eigen::Matrix<double, 6, 6>>& covariance,
-                                        double max_gap_s) {
+                                        double max_gap_s, const IntegrityLimits& limits) {
   NeesResult out;
   const double max_gt_gap = max_gt_gap_s(stamps_of(gt));
   std::vector<double> nees;
@@ -277,6 +277,24 @@ NeesResult evaluate_frame_to_frame_nees(const std::vector<StampedPose>& gt,
     nees.push_back(e.dot(ldlt.solve(e)));
     sum_t += e_t.dot(c.topLeftCorner<3, 3>().ldlt().solve(e_t));
     sum_r += e_r.dot(c.bottomRightCorner<3, 3>().ldlt().solve(e_r));
+    // Against the reported covariance with the ground truth's own noise.
+    Vector6d gt_variance;
+    gt_variance << Vector3d::Constant(limits.gt_translation_sigma_m *
+                                      limits.gt_translation_sigma_m),
+        Vector3d::Constant(limits.gt_rotation_sigma_rad * limits.gt_rotation_sigma_rad);
+    const Eigen::Matrix<double, 6, 6> c_gt =
+        c + Eigen::Matrix<double, 6, 6>(gt_variance.asDiagonal());
+    const double d2 = e.dot(c_gt.ldlt().solve(e));
+    if (d2 > limits.chi2_99_99) {
+      const Vector6d excess = e * (1.0 - std::sqrt(limits.chi2_99_99 / d2));
+      const double excess_m = excess.head<3>().norm(), excess_rad = excess.tail<3>().norm();
+      if (excess_m > limits.max_excess_m || excess_rad > limits.max_excess_rad) {
+        ++out.misleading;
+        out.misleading_stamps_s.push_back(est[i].stamp_s);
+        out.worst_excess_m = std::max(out.worst_excess_m, excess_m);
+        out.worst_excess_deg = std::max(out.worst_excess_deg, excess_rad * 180.0 / M_PI);
+      }
+    }
   }
   out.pairs = static_cast<int>(nees.size());
   if (out.pairs == 0) return out;
@@ -286,6 +304,8 @@ NeesResult evaluate_frame_to_frame_nees(const std::vector<StampedPose>& gt,
   out.mean_translation = sum_t / out.pairs;
   out.mean_rotation = sum_r / out.pairs;
   out.median = median_of(nees);
+  std::sort(nees.begin(), nees.end());
+  out.p99 = nees[std::min(nees.size() - 1, static_cast<size_t>(0.99 * nees.size()))];
   return out;
 }
 

@@ -218,6 +218,14 @@ int weigh_rows(const float* __restrict residual, const float* __restrict inv_sig
 }
 }  // namespace
 
+size_t Tracker::scratch_bytes(const PinholeIntrinsics& finest, const TrackerOptions& opt) {
+  // 18 float buffers and one of offsets, a slot per point (allocate()).
+  constexpr size_t kBuffers = 19;
+  const int n = TrackPoints::round_up(std::max(1, KeyframeBuilder::most_points(finest, opt)),
+                                      TrackPoints::kBlock);
+  return kBuffers * sizeof(float) * static_cast<size_t>(n);
+}
+
 void Tracker::allocate(const Keyframe& model, const TrackerOptions& opt) {
   opt_ = opt;
   int n = 1;
@@ -530,6 +538,24 @@ TrackResult Tracker::track_best(const Keyframe& kf, const FramePyramid& frame,
   return result;
 }
 
+void Tracker::profile(const Keyframe& kf, const FramePyramid& frame, const SE3& T_k_c,
+                      const Vector6d& d, const double* offsets, int n, int level,
+                      const ReferenceScales& reference, uint8_t terms, double* mean_cost,
+                      double* valid_fraction) {
+  terms_ = terms;
+  for (int i = 0; i < n; ++i) {
+    if (reference.photometric[level] > 0.f) ph_sigma_ = reference.photometric[level];
+    geo_scale_ = 1.f;
+    gain_ = 1.f;
+    brightness_ = 0.f;
+    const SE3 T = T_k_c * SE3::exp(d * offsets[i]);
+    const LevelCost c = evaluate_level(kf, frame, level, T.inverse(), false);
+    mean_cost[i] = c.mean_valid_cost();
+    if (valid_fraction != nullptr)
+      valid_fraction[i] = c.total > 0 ? double(c.valid) / c.total : 0.0;
+  }
+}
+
 namespace {
 struct Spread {
   double n = 0, sum = 0, sum2 = 0;
@@ -605,6 +631,13 @@ void Tracker::describe_depth_degeneracy(const TrackPoints& geo,
   out->depth_degenerate = false;
   out->weak_direction_std_m = 0.0;
   out->weak_direction.setZero();
+  out->depth_translation_axes.setIdentity();
+  if ((out->terms & kGeometricTerm) != 0 && H_geo.topLeftCorner<3, 3>().trace() > 0.0) {
+    // Translation alone: sensor noise gives every direction some information from a plane's
+    // gradients, which turns the six-dimensional weakest direction, but not these.
+    const Eigen::SelfAdjointEigenSolver<Matrix3d> t(H_geo.topLeftCorner<3, 3>());
+    out->depth_translation_axes = t.eigenvectors();
+  }
   int n = 0;
   for (int i = 0; i < geo.size(); i += kStride) scratch_[n++] = geo.z()[i];
   if ((out->terms & kGeometricTerm) == 0 || n == 0 || !(H_geo.trace() > 0.0)) return;

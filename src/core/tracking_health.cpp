@@ -11,6 +11,15 @@ bool within_motion_limits(const SE3& T_last_current, double dt_s, const HealthLi
   return speed <= limits.max_speed_m_s && rate <= limits.max_rotation_rate_rad_s;
 }
 
+bool same_pose(const SE3& a, const SE3& b) {
+  const SE3 d = a.inverse() * b;
+  return d.translation().norm() <= kSamePoseM && so3_log(d.quaternion()).norm() <= kSamePoseRad;
+}
+
+double prediction_reach_m(double dt_s, const HealthLimits& limits) {
+  return limits.max_acceleration_m_s2 * dt_s * dt_s + kPoseNoiseM;
+}
+
 uint32_t failed_health_checks(const TrackResult& r, const HealthContext& context,
                               const HealthLimits& limits) {
   uint32_t failed = 0;
@@ -40,7 +49,9 @@ uint32_t failed_health_checks(const TrackResult& r, const HealthContext& context
     failed |= kWeakDirection;
   }
   if (context.dt_s > 0.0) {
-    if (!within_motion_limits(context.T_last_current, context.dt_s, limits)) {
+    if (!within_motion_limits(context.T_last_current, context.dt_s, limits) ||
+        (context.predicted &&
+         !(context.from_prediction_m <= prediction_reach_m(context.dt_s, limits)))) {
       failed |= kTooFast;
     }
   }
@@ -57,7 +68,7 @@ void describe_health(uint32_t failed, char* buf, int size) {
   } kNames[] = {{kFewResiduals, "few residuals"},       {kPhotometricMisfit, "photometric misfit"},
                 {kGeometricMisfit, "geometric misfit"}, {kCostAboveTypical, "cost above typical"},
                 {kIllConditioned, "ill-conditioned"},   {kTooFast, "too fast"},
-                {kWeakDirection, "weak direction"}};
+                {kWeakDirection, "weak direction"},     {kAmbiguous, "ambiguous"}};
   if (size <= 0) return;
   if (failed == 0) {
     std::snprintf(buf, static_cast<size_t>(size), "healthy");

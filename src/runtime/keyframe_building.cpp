@@ -13,6 +13,7 @@ size_t KeyframeBuildTask::bytes_needed(const Params& p, int map_points) {
   constexpr size_t kImageBytesPerPixel = 44;
   const size_t pixels = static_cast<size_t>(p.camera.width_px) * p.camera.height_px;
   return pixels * kImageBytesPerPixel + KeyframeBuilder::keyframe_bytes(p.camera, p.tracker) +
+         KeyframeAliasFinder::bytes_needed(p.camera, p.tracker) +
          static_cast<size_t>(kLocalMaps) * static_cast<size_t>(map_points) * sizeof(MapPoint);
 }
 
@@ -20,6 +21,8 @@ void KeyframeBuildTask::allocate(const Params& p, int map_points, ClockFn clock)
   clock_ = clock;
   builder_.allocate(p.camera, p.tracker);
   builder_.allocate_keyframe(&keyframe_);
+  aliases_.allocate(keyframe_, p.tracker);
+  alias_range_m_ = alias_range_m(p);
   frame_.allocate(p.camera, p.sensor.depth_factor, p.sensor.depth_range);
   propagated_.allocate(p.camera, p.sensor.depth_factor, p.sensor.depth_range);
   for (LocalMap& m : local_maps_) m.points.reserve_once(map_points);
@@ -45,6 +48,7 @@ void KeyframeBuildTask::step(const KeyframeOrder& order) {
   if (order.with_local_maps) fill_sensor_blind_pixels(order.T_w_k);
   builder_.build(frame_, order.id, order.timestamp_ns, order.T_w_k, &keyframe_,
                  order.with_local_maps ? &propagated_ : nullptr);
+  aliases_.find(frame_, keyframe_, alias_range_m_, &keyframe_.aliases);
   if (clock_ != nullptr) {
     last_build_ns_ = clock_() - t0;
     per_keyframe_.add(last_build_ns_);
@@ -57,6 +61,7 @@ void KeyframeBuildTask::hand_over(Keyframe* kf) {
   kf->id = keyframe_.id;
   kf->timestamp_ns = keyframe_.timestamp_ns;
   kf->T_w_k = keyframe_.T_w_k;
+  kf->aliases = keyframe_.aliases;
   kf->active_photometric = 0;
   // Swapped, not copied: the slot's old buffers are the next build's.
   for (int l = 0; l < kPyramidLevels; ++l) {

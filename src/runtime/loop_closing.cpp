@@ -72,7 +72,7 @@ size_t LoopModule::bytes_needed(const Params& p) {
   const size_t edges = places * kEdgesPerPlace;
   constexpr size_t kGraphBytesPerNode = 3 * sizeof(Matrix6d) + 6 * sizeof(Vector6d) + sizeof(SE3);
   constexpr size_t kGraphBytesPerEdge = 2 * sizeof(Matrix6d) + sizeof(SE3) + 16;
-  return places * (kGraphBytesPerNode + 5 * sizeof(int)) +
+  return places * (kGraphBytesPerNode + 5 * sizeof(int) + sizeof(uint8_t)) +
          edges * (sizeof(Edge) + kGraphBytesPerEdge + 2 * sizeof(int)) +
          ViewAligner::bytes_needed(p.camera, tracking_options(p));
 }
@@ -94,6 +94,7 @@ Status LoopModule::init(const Params& params, const Vocabulary* vocabulary, Plac
   graph_.allocate(places, edges);
   edges_.reserve_once(edges);
   for (auto* a : {&hops_, &queue_, &node_of_slot_}) a->reset(new int[static_cast<size_t>(places)]);
+  after_restart_.reset(new uint8_t[static_cast<size_t>(places)]());
   first_neighbour_.reset(new int[static_cast<size_t>(places) + 1]);
   neighbours_.reset(new int[2 * static_cast<size_t>(edges)]);
   return Status::ok();
@@ -131,6 +132,7 @@ void LoopModule::add_keyframe(const LoopKeyframe& keyframe) {
     reference = query - 1;
     measured = EdgeKind::kRestart;
   }
+  after_restart_[query_handle.slot] = measured == EdgeKind::kRestart;
   if (reference >= 0) {
     // Its pose came from this measurement, so the map agrees with it.
     const bool known = measured != EdgeKind::kRestart;
@@ -144,26 +146,78 @@ void LoopModule::add_keyframe(const LoopKeyframe& keyframe) {
   bool correct = false;
   measure_hops(query_handle.slot);
   PlaceCandidate candidates[CandidateBudget::kTotal];
-  const int n = choose_candidates(query_handle.slot, candidates);
+  // A keyframe whose image repeats along a surface does not say where along it a match is.
+  const int n = keyframe.repeats ? 0 : choose_candidates(query_handle.slot, candidates);
   aligner_.set(1, keyframe.view);
+  // Verified first: revisits that put the keyframe in places further apart than a jump the
+  // map would report are a repeated scene (panels, tiles), not a loop, and none of them is kept.
+  Edge verified[CandidateBudget::kTotal];
+  int m = 0;
+  bool revisits_agree = true;
+  const Edge* first_revisit = nullptr;
   for (int i = 0; i < n; ++i) {
+    const PlaceRecord& record = store_->at_slot(candidates[i].slot);
+    if (record.repeats) continue;
     ++counters_.candidates;
-    aligner_.set(0, store_->at_slot(candidates[i].slot).view);
+    aligner_.set(0, record.view);
     const ViewAlignment a =
         aligner_.align(candidates[i].guesses, candidates[i].guess_count, params_.health);
     if (!measures_pose(a)) continue;
     const Matrix6d information =
         graph_information(a.forward.information / params_.covariance_scale, a.T_a_b);
-    const PlaceHandle place{candidates[i].slot, store_->at_slot(candidates[i].slot).generation};
-    const bool disagrees =
-        add_edge({place, query_handle, a.T_a_b, information, candidates[i].kind});
+    verified[m] = {PlaceHandle{candidates[i].slot, record.generation}, query_handle, a.T_a_b,
+                   information, candidates[i].kind};
+    if (candidates[i].kind == EdgeKind::kRevisit && !within_drift(candidates[i].slot, query, a)) {
+      // The two only look alike: neither is a place to be found at again.
+      std::lock_guard<std::mutex> lock(store_->mutex());
+      store_->mark_repeats(candidates[i].slot);
+      store_->mark_repeats(query_handle.slot);
+      ++counters_.look_alikes;
+      continue;
+    }
+    if (candidates[i].kind == EdgeKind::kRevisit) {
+      if (first_revisit == nullptr) {
+        first_revisit = &verified[m];
+      } else {
+        const SE3 d =
+            (store_->get(first_revisit->from)->T_w_k * first_revisit->T_from_to).inverse() *
+            (record.T_w_k * a.T_a_b);
+        revisits_agree = revisits_agree &&
+                         d.translation().norm() <= params_.loop.max_reported_jump_m &&
+                         so3_log(d.quaternion()).norm() <= params_.loop.max_reported_jump_rad;
+      }
+    }
+    ++m;
+  }
+  if (!revisits_agree) ++counters_.revisits_disagreeing;
+  for (int i = 0; i < m; ++i) {
+    const bool revisit = verified[i].kind == EdgeKind::kRevisit;
+    if (revisit && !revisits_agree) continue;
+    const bool disagrees = add_edge(verified[i]);
     // A neighbour's edge refines the map at the next optimisation; a revisit corrects it.
-    correct |= disagrees && candidates[i].kind == EdgeKind::kRevisit;
-    ++(candidates[i].kind == EdgeKind::kRevisit ? counters_.revisit_edges
-                                                : counters_.covisible_edges);
+    correct |= disagrees && revisit;
+    ++(revisit ? counters_.revisit_edges : counters_.covisible_edges);
   }
   search_time_.add(clock_() - t1);
   if (correct) optimise();
+}
+
+bool LoopModule::within_drift(int place_slot, int query, const ViewAlignment& a) const {
+  const PlaceRecord& place = store_->at_slot(place_slot);
+  const PlaceRecord& latest = store_->in_order(query);
+  // The distance travelled between them, along the places in between (the earlier place may be
+  // gone from the order: then from the oldest place kept).
+  int from = store_->order_of(place.keyframe_id);
+  if (from < 0) from = 0;
+  double travelled = 0.0;
+  for (int i = from; i < query; ++i) {
+    if (after_restart_[store_->handle(i + 1).slot]) return true;
+    travelled +=
+        (store_->in_order(i + 1).T_w_k.translation() - store_->in_order(i).T_w_k.translation())
+            .norm();
+  }
+  const SE3 correction = (place.T_w_k * a.T_a_b).inverse() * latest.T_w_k;
+  return correction.translation().norm() <= params_.loop.max_drift_ratio * travelled + kSamePoseM;
 }
 
 void LoopModule::add_reuse(const LoopKeyframe& message) {
@@ -183,6 +237,7 @@ void LoopModule::remember(const LoopKeyframe& keyframe, const SE3& T_w_k) {
   r->keyframe_id = keyframe.keyframe_id;
   r->timestamp_ns = keyframe.timestamp_ns;
   r->T_w_k = T_w_k;
+  r->repeats = keyframe.repeats;
   for (const Feature& f : recognizer_.features()) (void)r->features.push_back(f);
   for (const BowEntry& e : recognizer_.bow()) (void)r->bow.push_back(e);
   std::memcpy(r->view.gray.data(), keyframe.view.gray.data(), keyframe.view.gray.size());

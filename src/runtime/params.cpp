@@ -179,6 +179,10 @@ const KeySpec kSpecs[] = {
      RGBDTAM_FIELD(loop.max_reported_jump_m), false},
     {"loop.max_reported_jump_angle", ValueType::kDegreesAsRadians, 0, 180, "deg",
      "... or turning it further", RGBDTAM_FIELD(loop.max_reported_jump_rad), false},
+    {"loop.max_drift", ValueType::kReal, 0.001, 10, "",
+     "a revisit moving the map further than this fraction of the distance travelled since the "
+     "earlier place is a look-alike, not a loop: neither place is used again",
+     RGBDTAM_FIELD(loop.max_drift_ratio), false},
     // tracker.lost_sigma_ratio: now health.max_sigma_ratio.
     // tracker.lost_frames_before_reset: now health.reset_after_lost_ms.
     {"health.min_residuals", ValueType::kInt, 6, 1e6, "",
@@ -208,6 +212,10 @@ const KeySpec kSpecs[] = {
     {"health.max_rotation_rate", ValueType::kDegreesAsRadians, 1, 100000, "deg/s",
      "lost when the camera turned faster than this since the last valid pose",
      RGBDTAM_FIELD(health.max_rotation_rate_rad_s), false},
+    {"health.max_acceleration", ValueType::kReal, 0.1, 10000, "m/s^2",
+     "how far the camera can be from its constant-velocity prediction: lost beyond it, and "
+     "ambiguous when another pose within it fits about as well",
+     RGBDTAM_FIELD(health.max_acceleration_m_s2), false},
     {"health.reset_after_lost_ms", ValueType::kMillisecondsAsNs, 0, 1e6, "ms",
      "lost this long, tracking restarts at the last valid pose", RGBDTAM_FIELD(reset_after_lost_ns),
      false},
@@ -280,6 +288,8 @@ TrackerOptions tracking_options(const Params& p) {
   o.inverse_depth_sigma_floor = p.sensor.inverse_depth_quantum_sigma();
   return o;
 }
+
+double alias_range_m(const Params& p) { return p.health.max_speed_m_s * kMaxVelocityGapS; }
 
 HealthLimits health_limits(const Params& p) {
   HealthLimits h = p.health;

@@ -44,6 +44,7 @@ PlaceRecord* PlaceStore::begin_insert() {
   ++r.generation;
   r.features.clear();
   r.bow.clear();
+  r.repeats = false;
   return &r;
 }
 

@@ -7,12 +7,6 @@
 
 namespace rgbdtam {
 
-Eigen::Matrix<double, 6, 6> pose_covariance(const PoseEstimate& pose) {
-  const Eigen::FullPivLU<Eigen::Matrix<double, 6, 6>> lu(pose.information);
-  if (!lu.isInvertible()) return Eigen::Matrix<double, 6, 6>::Constant(NAN);
-  return lu.inverse();
-}
-
 SE3 camera_pose_of(const mavlink::Odometry& o, const SE3& T_b_c) {
   const SE3 T_l_b(Eigen::Quaterniond(o.q[0], o.q[1], o.q[2], o.q[3]), Vector3d(o.x, o.y, o.z));
   return T_b_c.inverse() * T_l_b * T_b_c;

@@ -50,24 +50,27 @@ Relocalisation Relocaliser::find(const FramePyramid& frame, const SE3* T_w_last,
     candidates[n] = PlaceCandidate();
     candidates[n++].slot = nearest;
   }
+  // Places that each show the frame somewhere else: a repeated scene, and no fix.
+  bool several_poses = false;
   for (int i = 0; i < n; ++i) {
     PlaceCandidate& c = candidates[i];
     const PlaceRecord& place = places->at_slot(c.slot);
+    if (place.repeats) continue;
     // Where the camera was last, and where the place was seen: the outage's motion is unknown.
     if (T_w_last != nullptr) c.add_guess(place.T_w_k.inverse() * *T_w_last);
     c.add_guess(SE3());
     aligner_.set(0, place.view);
     const ViewAlignment a = aligner_.align(c.guesses, c.guess_count, params_.health);
+    if (!shows_same_place(a)) continue;
+    if (best.found && !same_pose(best.T_w_c(), place.T_w_k * a.T_a_b)) several_poses = true;
     // Of several places, the one sharing the most of the frame.
-    if (!shows_same_place(a) ||
-        (best.found && a.forward.overlap <= best.alignment.forward.overlap)) {
-      continue;
-    }
+    if (best.found && a.forward.overlap <= best.alignment.forward.overlap) continue;
     best.found = true;
     best.place_id = place.keyframe_id;
     best.T_w_place = place.T_w_k;
     best.alignment = a;
   }
+  if (several_poses) return Relocalisation();
   return best;
 }
 

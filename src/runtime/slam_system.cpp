@@ -19,9 +19,11 @@ MemoryNeed memory_need(const Params& p, int vocabulary_words) {
                MappingModule::kOpenKeyframes * SeedMap::bytes_needed(mv) +
                seeds * (sizeof(FusedPixel) + 2 * sizeof(MapPoint));  // + the local maps
   }
+  // The tracker's own alias finder (for the keyframe it builds at once from the last valid frame).
   m.images =
       pixels * (kTrackerImageBytesPerPixel + (p.map_enabled ? kMapperImageBytesPerPixel : 0)) +
-      KeyframeBuildTask::bytes_needed(p, static_cast<int>(seeds));
+      KeyframeBuildTask::bytes_needed(p, static_cast<int>(seeds)) +
+      KeyframeAliasFinder::bytes_needed(p.camera, p.tracker);
   if (p.loop.enabled && vocabulary_words > 0) {
     // The places, the loop module (its recogniser, view aligner and graph) and the tracker's
     // relocaliser, the keyframe queue's images and the corrections.

@@ -17,7 +17,7 @@ Status TrackingPipeline::init(const Params& params, KeyframePool* keyframes,
   keyframes_.init(params_, keyframes, building, clock);
   Keyframe model;
   keyframes_.allocate_model(&model);
-  search_.allocate(model, params_.tracker, params_.health);
+  search_.allocate(model, params_.tracker, params_.health, alias_range_m(params_));
   return Status::ok();
 }
 
@@ -39,9 +39,12 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
     adopt_corrections();
     const Attempt a = estimate(frame.timestamp_ns);
     out.keyframe_id = keyframes_.reference()->id;
+    // A frame lost because the scene repeats or leaves a direction free is no better found by
+    // its appearance: the loss ends in a restart, not a relocalisation.
+    const bool look_alike_scene = (a.failed & (kAmbiguous | kWeakDirection)) != 0;
     if (a.failed == 0) {
       accept(a, frame, &out, true);
-    } else if (!relocalise(frame, &out)) {
+    } else if (look_alike_scene || !relocalise(frame, &out)) {
       on_lost(frame, a.failed, &out);
     }
     report(frame.timestamp_ns, &out);
@@ -123,6 +126,7 @@ void TrackingPipeline::adopt_corrections() {
   while (const LoopCorrection* c = loop_.next_correction()) {
     SE3 delta;
     if (keyframes_.move_by(*c, &delta)) {
+      keyframes_.joined();
       motion_.correct(delta, params_.loop.max_reported_jump_m, params_.loop.max_reported_jump_rad);
     }
     loop_.correction_taken();
@@ -276,6 +280,7 @@ bool TrackingPipeline::relocalise(const SensorFrame& frame, PoseEstimate* out) {
     ++counters_.tracked;
   }
   out->flags |= kRelocalised | kReset;
+  keyframes_.joined();
   motion_.jumped();
   ++counters_.relocalised;
   return true;
@@ -306,6 +311,7 @@ void TrackingPipeline::on_lost(const SensorFrame& frame, uint32_t failed, PoseEs
                      out)) {
     // Restart from the last valid pose: the estimate jumps, so say so.
     keyframes_.forget_fallback();
+    keyframes_.restarted();
     motion_.restart(frame.timestamp_ns);
     frames_.forget_last_valid();
     out->flags |= kReset;

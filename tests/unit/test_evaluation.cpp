@@ -178,6 +178,31 @@ TEST(Nees, AveragesSixWhenTheCovarianceIsTrueAndScalesWithIt) {
   EXPECT_NEAR(consistent.mean_translation, 3.0, 0.4);
   for (auto& c : cov) c *= 4.0;  // four times too cautious: a quarter of the NEES
   EXPECT_NEAR(evaluate_frame_to_frame_nees(gt, est, cov).mean, 1.5, 0.15);
+  EXPECT_EQ(consistent.misleading, 0) << "a true covariance misleads about one pose in 10^4";
+  EXPECT_GT(consistent.p99, consistent.median);
+}
+
+TEST(Nees, APoseWrongBeyondItsCovarianceByMoreThanACentimetreIsMisleading) {
+  // Exact estimates at 30 Hz with a 1 mm covariance; one pose 5 cm off (its step in and out
+  // of it both wrong), another 2 cm off but sent with a 3 cm covariance (honest), and one
+  // 1 cm off: outside its region, but by less than a centimetre.
+  std::vector<StampedPose> gt, est;
+  std::vector<Eigen::Matrix<double, 6, 6>> cov;
+  const Eigen::Matrix<double, 6, 6> tight = 1e-6 * Eigen::Matrix<double, 6, 6>::Identity();
+  for (int i = 0; i < 90; ++i) {
+    const double t = i / 30.0;
+    const SE3 truth(so3_exp(Vector3d(0, 0.1 * t, 0)), Vector3d(0.2 * t, 0, 0));
+    gt.push_back({t, truth});
+    const double off = i == 30 ? 0.05 : i == 60 ? 0.02 : i == 75 ? 0.01 : 0.0;
+    est.push_back({t, truth * SE3(Eigen::Quaterniond::Identity(), Vector3d(off, 0, 0))});
+    cov.push_back(i == 60 ? 9e-4 * Eigen::Matrix<double, 6, 6>::Identity() : tight);
+  }
+  const NeesResult r = evaluate_frame_to_frame_nees(gt, est, cov);
+  ASSERT_EQ(r.misleading, 2) << "the 5 cm pose, and the exact one after it";
+  EXPECT_NEAR(r.misleading_stamps_s[0], 1.0, 1e-9);
+  EXPECT_NEAR(r.misleading_stamps_s[1], 31 / 30.0, 1e-9);
+  EXPECT_GT(r.worst_excess_m, 0.04);
+  EXPECT_LT(r.worst_excess_m, 0.05);
 }
 
 }  // namespace

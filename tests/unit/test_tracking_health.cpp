@@ -152,4 +152,36 @@ TEST(TrackingHealth, TheDescriptionNamesEveryFailedCheckAndFitsItsBuffer) {
 }
 
 }  // namespace
+
+namespace {
+TEST(TrackingHealth, AStepBeyondWhatAccelerationAllowsFromThePredictionIsTooFast) {
+  HealthLimits limits;  // 20 m/s^2
+  TrackResult r;
+  r.state = TrackingState::kOk;
+  r.residuals_used = 1000;
+  HealthContext c;
+  c.dt_s = 1.0 / 30;
+  c.predicted = true;
+  // 20 m/s^2 over a 30 Hz frame: 2.2 cm, and the estimates' own 2 cm; at 10 Hz, 22 cm.
+  EXPECT_NEAR(prediction_reach_m(c.dt_s, limits), 0.0422, 1e-4);
+  EXPECT_NEAR(prediction_reach_m(0.1, limits), 0.22, 1e-9);
+  c.from_prediction_m = 0.04;
+  EXPECT_EQ(failed_health_checks(r, c, limits) & kTooFast, 0u);
+  c.from_prediction_m = 0.05;
+  EXPECT_NE(failed_health_checks(r, c, limits) & kTooFast, 0u);
+  c.predicted = false;  // without a velocity, only the speed limit holds
+  EXPECT_EQ(failed_health_checks(r, c, limits) & kTooFast, 0u);
+}
+
+TEST(TrackingHealth, TwoEstimatesAFewMillimetresApartAreTheSamePose) {
+  const SE3 a(so3_exp(Vector3d(0.1, 0.2, 0.3)), Vector3d(1, 2, 3));
+  EXPECT_TRUE(same_pose(a, a * SE3(Eigen::Quaterniond::Identity(), Vector3d(0.01, 0, 0))));
+  EXPECT_FALSE(same_pose(a, a * SE3(Eigen::Quaterniond::Identity(), Vector3d(0.03, 0, 0))));
+  EXPECT_FALSE(same_pose(a, a * SE3(so3_exp(Vector3d(0, 0.03, 0)), Vector3d::Zero())));
+  char why[64];
+  describe_health(kAmbiguous, why, sizeof(why));
+  EXPECT_STREQ(why, "ambiguous");
+}
+}  // namespace
+
 }  // namespace rgbdtam

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "repeated_scene.hpp"
 #include "stress_variants.hpp"
 
 namespace {
@@ -23,7 +24,9 @@ int usage() {
                "  rgbdtam-stress degenerate <out> --scene corridor|room [--frames <n>]\n"
                "  rgbdtam-stress wall <out> --distance-m <m> --yaw-deg <deg> [--frames <n>]\n"
                "  rgbdtam-stress concat <first> <second> <out> [--gap-s <s>]\n"
-               "  rgbdtam-stress wander <in> <out> --config <file> [--frames <n>] [--seed <n>]\n");
+               "  rgbdtam-stress wander <in> <out> --config <file> [--frames <n>] [--seed <n>]\n"
+               "  rgbdtam-stress repeated <out> --scene <name> [--frames <n>]\n"
+               "  rgbdtam-stress repeated --list\n");
   return 2;
 }
 }  // namespace
@@ -32,6 +35,10 @@ int main(int argc, char** argv) {
   using namespace rgbdtam::testing;
   if (argc < 3) return usage();
   const std::string verb = argv[1];
+  if (verb == "repeated" && std::string(argv[2]) == "--list") {
+    for (const RepeatedScene& s : RepeatedScene::family()) std::printf("%s\n", s.name.c_str());
+    return 0;
+  }
   const char* config = nullptr;
   std::string kind, scene;
   unsigned seed = 1;
@@ -98,6 +105,11 @@ int main(int argc, char** argv) {
     ok = degenerate_sequence(positional[0], scene, frames);
   } else if (verb == "wall" && positional.size() == 1) {
     ok = wall_sequence(positional[0], distance_m, yaw_deg, frames);
+  } else if (verb == "repeated" && positional.size() == 1) {
+    RepeatedScene s;
+    ok = RepeatedScene::named(scene, &s) && frames >= 2;
+    if (!ok) std::fprintf(stderr, "repeated: no scene '%s' (--list names them)\n", scene.c_str());
+    ok = ok && repeated_sequence(positional[0], s, frames);
   } else if (verb == "pan" && positional.size() == 1) {
     ok = pan_sequence(positional[0], peak, frames, fps);
   } else {

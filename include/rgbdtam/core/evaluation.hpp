@@ -75,14 +75,31 @@ bool interpolate_pose(const std::vector<StampedPose>& gt, double t, double max_g
 // D = P_{i-1}^-1 P_i, (translation, rotation) in camera i, against the covariance
 // C_{i-1} + C_i of the two poses' reported covariances (same order, camera frame). Ground truth
 // is interpolated at the estimates' stamps. A consistent covariance averages 6.
+//
+// Misleading poses (ours): pose i is misleading when its frame-to-frame error lies outside the
+// 99.99 % region of C_{i-1} + C_i plus the ground truth's own noise (NEES beyond the chi-square
+// quantile), and the part of the error beyond that region (the error less its radial
+// projection onto the region's boundary) exceeds 1 cm or 1 degree: a pose the covariance sent
+// with it says cannot be that wrong, and it is.
+struct IntegrityLimits {
+  double chi2_99_99 = 27.8563;            // chi-square, 6 degrees of freedom, 99.99 %
+  double gt_translation_sigma_m = 0.001;  // per axis
+  double gt_rotation_sigma_rad = 0.1 * 3.14159265358979 / 180.0;
+  double max_excess_m = 0.01;
+  double max_excess_rad = 1.0 * 3.14159265358979 / 180.0;
+};
 struct NeesResult {
   int pairs = 0;
-  double mean = 0, median = 0;
+  double mean = 0, median = 0, p99 = 0;
   double mean_translation = 0, mean_rotation = 0;  // the 3-dof parts, each consistent at 3
+  int misleading = 0;
+  double worst_excess_m = 0, worst_excess_deg = 0;
+  std::vector<double> misleading_stamps_s;
 };
 NeesResult evaluate_frame_to_frame_nees(const std::vector<StampedPose>& gt,
                                         const std::vector<StampedPose>& est,
                                         const std::vector<Eigen::Matrix<double, 6, 6>>& covariance,
-                                        double max_gap_s = 0.1);
+                                        double max_gap_s = 0.1,
+                                        const IntegrityLimits& limits = IntegrityLimits());
 
 }  // namespace rgbdtam

@@ -5,6 +5,7 @@
 // SE(3) over a 4-level pyramid. All buffers are sized in allocate(); track() never allocates.
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 
 #include "rgbdtam/core/canny.hpp"
@@ -48,6 +49,15 @@ struct MapPoint {
   float x, y, z;
 };
 
+// A shift of the keyframe's camera (keyframe frame, m) that sees what the keyframe sees: where a
+// texture repeats along a surface (tiles, panels, brick), a frame fits as well one period away,
+// so a pose against the keyframe is determined only up to its aliases (KeyframeAliasFinder).
+struct KeyframeAliases {
+  static constexpr int kMax = 8;
+  Vector3d shift_k[kMax];
+  int count = 0;
+};
+
 // A keyframe's residual points. Its photometric points are double-buffered: the mapper writes
 // the fused map into the inactive set, and the tracker swaps the sets between frames once told
 // the map is there. The telling, and which thread may touch what when, are the runtime's
@@ -60,6 +70,7 @@ struct Keyframe {
   TrackPoints geometric[kPyramidLevels];  // sensor depth only
   int active_photometric = 0;
   FixedVector<MapPoint> map_points;  // the mapper's fused edge map, with the inactive set
+  KeyframeAliases aliases;
 
   const TrackPoints& photometric(int level) const {
     return photometric_sets[active_photometric][level];
@@ -73,6 +84,8 @@ class KeyframeBuilder {
  public:
   // What allocate_keyframe reserves for one keyframe, in bytes, before allocating it.
   static size_t keyframe_bytes(const PinholeIntrinsics& finest, const TrackerOptions& opt);
+  // The most points a keyframe holds at any level, in one set.
+  static int most_points(const PinholeIntrinsics& finest, const TrackerOptions& opt);
   void allocate(const PinholeIntrinsics& finest, const TrackerOptions& opt);
   void allocate_keyframe(Keyframe* kf) const;
   // photometric_depth, when given, replaces the frame's sensor depth for the photometric points
@@ -97,7 +110,6 @@ class KeyframeBuilder {
   CannyDetector canny_;
   ImageU8 edges_[kPyramidLevels];  // level l: some Canny edge inside the pixel's 2^l block
   ImageF gx_[kPyramidLevels], gy_[kPyramidLevels];
-  ImageF dgx_[kPyramidLevels], dgy_[kPyramidLevels];
   float gradient_threshold_[kPyramidLevels] = {};
 };
 
@@ -152,12 +164,18 @@ struct TrackResult {
   // The twist (v, omega) that moves the scene 1 m at its depth along the direction the depth
   // determines worst (whether or not degenerate); zero without the depth term.
   Vector6d weak_direction = Vector6d::Zero();
+  // The directions of translation (camera frame, unit columns) the depth term determines least
+  // to most: the surfaces' own directions first, along which a texture painted on them
+  // repeats. The camera's axes without the depth term.
+  Matrix3d depth_translation_axes = Matrix3d::Identity();
   // Finest-level J^T W J of the used terms, perturbation delta in T_c_k exp(-delta), (v, omega).
   Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
 };
 
 class Tracker {
  public:
+  // What allocate() takes for a keyframe of this camera and these options, in bytes.
+  static size_t scratch_bytes(const PinholeIntrinsics& finest, const TrackerOptions& opt);
   void allocate(const Keyframe& capacity_model, const TrackerOptions& opt);
   // reference: the yardstick for inliers; the solver itself scales each term by its own
   // residuals. terms: a subset of the configured residuals (a term without data is left
@@ -168,6 +186,12 @@ class Tracker {
   // view fit best at the reference scales is tracked through the pyramid.
   TrackResult track_best(const Keyframe& kf, const FramePyramid& frame, const SE3* T_k_c_guesses,
                          int count, const ReferenceScales& reference, uint8_t terms = kAllTerms);
+  // A cut through the cost: at T_k_c exp(s_i d) for each offset s_i, the mean cost of the
+  // keyframe's points at `level` that have a residual there, and (if wanted) the fraction of
+  // them that do, at the reference scales, without optimising.
+  void profile(const Keyframe& kf, const FramePyramid& frame, const SE3& T_k_c, const Vector6d& d,
+               const double* offsets, int n, int level, const ReferenceScales& reference,
+               uint8_t terms, double* mean_cost, double* valid_fraction = nullptr);
   // The visible fraction of the keyframe's points at a pose, without optimising: cheap enough
   // to rank several keyframes.
   double visible_at(const Keyframe& kf, const FramePyramid& frame, const SE3& T_k_c);
@@ -182,6 +206,9 @@ class Tracker {
     Eigen::Matrix<double, 6, 6> H_geometric = Eigen::Matrix<double, 6, 6>::Zero();  // its part
     Vector6d g = Vector6d::Zero();
     bool has_normal_equations = false;  // H and g are formed
+    double mean_valid_cost() const {
+      return valid > 0 ? valid_cost / valid : std::numeric_limits<double>::infinity();
+    }
   };
   LevelCost evaluate_level(const Keyframe& kf, const FramePyramid& frame, int level,
                            const SE3& T_c_k, bool new_scale);

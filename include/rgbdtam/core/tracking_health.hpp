@@ -29,6 +29,12 @@ struct HealthLimits {
   // Physical limits of the camera's motion since the last valid pose.
   double max_speed_m_s = 3.0;
   double max_rotation_rate_rad_s = 2.0 * 3.14159265358979;  // 360 deg/s
+  // How far from its constant-velocity prediction the camera can be after dt: this times dt^2
+  // (the prediction's velocity is the mean over the last interval, half an interval old): a
+  // pose further is too fast, and other minima are looked for within it. 2 g, four times the
+  // hand-held fr1_xyz and fr3_teddy peaks (the camera is at most 0.5 cm from its prediction at
+  // 30 Hz, 2.4 cm at 10 Hz).
+  double max_acceleration_m_s2 = 20.0;
 };
 
 // One bit per failed check; 0 = healthy.
@@ -40,6 +46,7 @@ enum HealthCheck : uint32_t {
   kIllConditioned = 1u << 4,    // the used terms do not determine the pose
   kTooFast = 1u << 5,           // faster than the physical limits
   kWeakDirection = 1u << 6,     // a direction the depth leaves free is not determined either
+  kAmbiguous = 1u << 7,         // another pose within the camera's reach fits about as well
 };
 
 struct HealthContext {
@@ -47,7 +54,24 @@ struct HealthContext {
   // The motion since the last valid pose, and the time it took; dt 0 = no earlier pose.
   SE3 T_last_current;
   double dt_s = 0.0;
+  // Where the camera was predicted, when the prediction holds up to its acceleration (a
+  // velocity from two valid poses); the translation from it to the pose, m.
+  bool predicted = false;
+  double from_prediction_m = 0.0;
 };
+
+// The estimates' own noise, which a prediction from two of them carries: real frames lie up to
+// 2.4 cm from their prediction at 30 Hz (fr1_xyz, fr3_teddy), of which the camera's own motion
+// is 0.4 cm.
+constexpr double kPoseNoiseM = 0.02;
+// How far from its constant-velocity prediction the camera can be after dt_s, m.
+double prediction_reach_m(double dt_s, const HealthLimits& limits);
+
+// Two estimates of one pose that are the same minimum of the cost, not two: within a fifth of
+// the false-valid limits (10 cm, 5 degrees).
+constexpr double kSamePoseM = 0.02;
+constexpr double kSamePoseRad = 1.0 * 3.14159265358979 / 180.0;
+bool same_pose(const SE3& a, const SE3& b);
 
 // The camera could have made this motion in dt_s (dt_s > 0); false for NaN.
 bool within_motion_limits(const SE3& T_last_current, double dt_s, const HealthLimits& limits);

@@ -11,6 +11,7 @@
 
 #include <atomic>
 
+#include "rgbdtam/core/keyframe_aliases.hpp"
 #include "rgbdtam/core/tracker.hpp"
 #include "rgbdtam/runtime/latency_stats.hpp"
 #include "rgbdtam/runtime/params.hpp"
@@ -75,6 +76,8 @@ class KeyframeBuildTask {
   KeyframeOrderQueue* queue_ = nullptr;
   ClockFn clock_ = nullptr;
   KeyframeBuilder builder_;
+  KeyframeAliasFinder aliases_;
+  double alias_range_m_ = 0.0;
   FramePyramid frame_;       // the keyframe's grey images and sensor inverse depth
   FramePyramid propagated_;  // ... its inverse depth with the local maps where the sensor is blind
   LocalMap local_maps_[kLocalMaps];

@@ -36,13 +36,15 @@ class CorrectionQueue : public SpscRing<LoopCorrection> {
 };
 
 struct LoopCounters {
-  uint32_t keyframes = 0;            // described and remembered
-  uint32_t candidates = 0;           // places whose views were aligned with a keyframe's
-  uint32_t covisible_edges = 0;      // ... verified: a neighbour
-  uint32_t revisit_edges = 0;        // ... verified: a revisit (a loop)
-  uint32_t reuse_edges = 0;          // the tracker took up an earlier keyframe
-  uint32_t edges_dropped = 0;        // the graph's edge store was full
-  uint32_t corrections = 0;          // optimisations that moved the map
+  uint32_t revisits_disagreeing = 0;  // keyframes whose revisits put them in different places
+  uint32_t look_alikes = 0;      // revisits asking more correction than odometry drifts: not loops
+  uint32_t keyframes = 0;        // described and remembered
+  uint32_t candidates = 0;       // places whose views were aligned with a keyframe's
+  uint32_t covisible_edges = 0;  // ... verified: a neighbour
+  uint32_t revisit_edges = 0;    // ... verified: a revisit (a loop)
+  uint32_t reuse_edges = 0;      // the tracker took up an earlier keyframe
+  uint32_t edges_dropped = 0;    // the graph's edge store was full
+  uint32_t corrections = 0;      // optimisations that moved the map
   uint32_t corrections_dropped = 0;  // the tracker had not taken the previous one
 };
 
@@ -114,6 +116,9 @@ class LoopModule {
   bool add_edge(const Edge& edge);
   // Graph distance (edges with a measurement) of every place from the one in `slot`; -1 where
   // the graph does not join them.
+  // A revisit of the place at place_slot by the newest place (order query), aligned by a, asks
+  // no more correction than odometry can have drifted since.
+  bool within_drift(int place_slot, int query, const ViewAlignment& a) const;
   void measure_hops(int slot);
   int choose_candidates(int query_slot, PlaceCandidate* out);
   void optimise();
@@ -132,6 +137,9 @@ class LoopModule {
   FixedVector<Edge> edges_;
   // Breadth-first search over the graph: hops per slot, the queue, adjacency in CSR form.
   std::unique_ptr<int[]> hops_, queue_, first_neighbour_, neighbours_;
+  // Per slot: the place's relation to its predecessor is unknown (a restart), so no drift
+  // bound holds across it.
+  std::unique_ptr<uint8_t[]> after_restart_;
   std::unique_ptr<int[]> node_of_slot_;  // the pose graph's node of each slot
   // The last correction, for keyframes the tracker made before adopting it.
   uint32_t corrections_sent_ = 0;

@@ -2,7 +2,10 @@
 // Typed, fixed-size messages between modules, all of them here. Timestamps are integer nanoseconds;
 // poses are T_w_c (world from camera), world = the first keyframe's camera frame.
 
+#include <cmath>
 #include <cstdint>
+
+#include <Eigen/LU>
 
 #include "rgbdtam/core/fixed_vector.hpp"
 #include "rgbdtam/core/image.hpp"
@@ -59,6 +62,14 @@ struct PoseEstimate {
   Eigen::Matrix<double, 6, 6> information;
 };
 
+// The covariance sent with a pose: the inverse of its information (NaN where it has none), over
+// (translation, rotation) in the camera frame.
+inline Eigen::Matrix<double, 6, 6> pose_covariance(const PoseEstimate& pose) {
+  const Eigen::FullPivLU<Eigen::Matrix<double, 6, 6>> lu(pose.information);
+  if (!lu.isInvertible()) return Eigen::Matrix<double, 6, 6>::Constant(NAN);
+  return lu.inverse();
+}
+
 // How a keyframe's pose was measured against the keyframe it names as its reference.
 enum class EdgeKind : uint8_t {
   kOdometry,        // tracked against it
@@ -88,6 +99,7 @@ struct LoopKeyframe {
   ImageF gray;           // level 0, undistorted, [0,1]
   ImageF inverse_depth;  // level 0 sensor inverse depth, 1/m
   View view;             // the pyramid's view level, remembered with the place
+  bool repeats = false;  // the keyframe's image matches itself shifted (KeyframeAliases)
 };
 
 struct KeyframePose {

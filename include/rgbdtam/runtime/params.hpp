@@ -53,6 +53,11 @@ struct LoopParams {
   // the other half to the tracker's own error.
   double max_reported_jump_m = 0.05;
   double max_reported_jump_rad = 2.5 * M_PI / 180.0;
+  // A revisit that would move the map further than this fraction of the distance travelled
+  // since the earlier place is more than odometry drifts (under 1 % on the development
+  // sequences): the two places only look alike (panels, tiles) and neither relocalises or
+  // closes a loop again.
+  double max_drift_ratio = 0.1;
 };
 
 // What a run does with a map file it loads (--map-in, a board's map.file).
@@ -90,6 +95,13 @@ struct Params {
   MapMode map_mode = MapMode::kSlam;
   LoopParams loop;
 };
+
+// A velocity estimated across a longer gap (a loss, dropped frames) is not a velocity.
+constexpr double kMaxVelocityGapS = 0.2;
+// How far along a surface a keyframe's aliases are looked for: as far as the camera can move
+// over the longest gap a velocity is measured across; a reach beyond it is ambiguous wherever
+// a keyframe has aliases at all.
+double alias_range_m(const Params& p);
 
 // The tracker's options with the sensor's noise model in them.
 TrackerOptions tracking_options(const Params& p);

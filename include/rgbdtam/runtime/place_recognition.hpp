@@ -28,6 +28,9 @@ struct PlaceRecord {
   FixedVector<Feature> features;
   BowVector bow;
   View view;
+  // Its image repeats along a surface: a match with it does not say where the camera is along
+  // that surface, so it neither relocalises nor closes a loop (not kept in map files).
+  bool repeats = false;
 };
 
 struct PlaceHandle {
@@ -59,6 +62,8 @@ class PlaceStore {
   // The order index of a keyframe's record, or -1 when it is not (or no longer) remembered.
   int order_of(uint32_t keyframe_id) const;
   const PlaceRecord& at_slot(int slot) const { return records_[slot]; }
+  // Under the lock: the place at slot looks like another the map knows to be elsewhere.
+  void mark_repeats(int slot) { records_[slot].repeats = true; }
   PlaceHandle handle(int order) const;
   const PlaceRecord* get(const PlaceHandle& h) const;
   // Lookups refused because the handle's record had been forgotten (any thread).

@@ -81,10 +81,6 @@ struct PeerState {
 // camera) an ODOMETRY describes, given the same body-from-camera extrinsics.
 SE3 camera_pose_of(const mavlink::Odometry& o, const SE3& T_b_c);
 
-// The pose's covariance, (translation, rotation) in the camera frame: the inverse of its
-// information; NaN everywhere when the information is singular.
-Eigen::Matrix<double, 6, 6> pose_covariance(const PoseEstimate& pose);
-
 class PoseLink {
  public:
   void init(const PoseLinkConfig& config, ByteLink* link);

@@ -12,6 +12,10 @@ void KeyframeHandover::init(const Params& params, KeyframePool* pool, KeyframeBu
   pool_ = pool;
   building_ = building;
   builder_.allocate(params.camera, params.tracker);
+  Keyframe model;
+  builder_.allocate_keyframe(&model);
+  aliases_.allocate(model, params.tracker);
+  alias_range_m_ = alias_range_m(params);
   const int map_points = params.map_enabled ? params.map_seeds : 0;
   pool_->allocate(params.keyframe_pool_size, builder_, map_points);
   building_->allocate(params, map_points, clock);
@@ -37,6 +41,7 @@ Keyframe* KeyframeHandover::from_last_valid_frame(const FrameBuffers& frames, co
   fallback_ = pool_->acquire(reference_);
   // Sensor depth only: the mapper never saw this frame's images as a keyframe's.
   builder_.build(*last, next_keyframe_id_++, last_ns, T_w_last, fallback_);
+  aliases_.find(*last, *fallback_, alias_range_m_, &fallback_->aliases);
   ++counters_.keyframes;
   return fallback_;
 }
@@ -227,7 +232,10 @@ int KeyframeHandover::nearest(const SE3& T_w_c, int wanted, Keyframe** out) {
     double nearest_distance = 0.0;
     for (int i = 0; i < pool_->size(); ++i) {
       Keyframe* kf = &pool_->at(i);
-      if (kf == reference_ || std::find(out, out + count, kf) != out + count) continue;
+      if (kf == reference_ || kf->id < oldest_in_frame_id_ ||
+          std::find(out, out + count, kf) != out + count) {
+        continue;
+      }
       const double d = distance(*kf);
       if (nearest == nullptr || d < nearest_distance) {
         nearest = kf;

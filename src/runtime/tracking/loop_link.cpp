@@ -38,6 +38,7 @@ void LoopLink::offer_keyframe(const Keyframe& kf, const KeyframeLink& link, cons
   std::memcpy(s->inverse_depth.data(), f.inverse_depth(0).data(),
               sizeof(float) * s->inverse_depth.size());
   capture_view(f, &s->view);
+  s->repeats = kf.aliases.count > 0;
   loop_queue_->publish();
 }
 

@@ -1,11 +1,11 @@
 #include "rgbdtam/runtime/tracking/motion_state.hpp"
 
 #include "rgbdtam/runtime/messages.hpp"
+#include "rgbdtam/runtime/params.hpp"
 
 namespace rgbdtam {
 namespace {
-// A velocity estimated across a longer gap (a loss, dropped frames) is not a velocity.
-constexpr int64_t kMaxVelocityGapNs = 200'000'000;
+constexpr int64_t kMaxVelocityGapNs = static_cast<int64_t>(kMaxVelocityGapS * 1e9);
 }  // namespace
 
 void MotionState::init(bool motion_model, int64_t reset_after_lost_ns) {
@@ -19,6 +19,10 @@ HealthContext MotionState::context(const SE3& T_w_c, int64_t t_ns, double typica
   if (has_last_ && t_ns > last_ns_) {
     context.T_last_current = T_w_last_.inverse() * T_w_c;
     context.dt_s = seconds_since_last(t_ns);
+    context.predicted = has_velocity_;
+    if (has_velocity_) {
+      context.from_prediction_m = (predict(t_ns).translation() - T_w_c.translation()).norm();
+    }
   }
   return context;
 }
@@ -28,12 +32,14 @@ void MotionState::begin(const SE3& T_w_c, int64_t t_ns) {
   last_ns_ = t_ns;
   has_last_ = true;
   velocity_.setZero();
+  has_velocity_ = false;
 }
 
 void MotionState::track(const SE3& T_w_c, int64_t t_ns, bool continuous) {
   const int64_t gap = t_ns - last_ns_;
   velocity_.setZero();
-  if (motion_model_ && continuous && has_last_ && gap > 0 && gap <= kMaxVelocityGapNs) {
+  has_velocity_ = motion_model_ && continuous && has_last_ && gap > 0 && gap <= kMaxVelocityGapNs;
+  if (has_velocity_) {
     velocity_ = (T_w_last_.inverse() * T_w_c).log() / (static_cast<double>(gap) * 1e-9);
   }
   T_w_last_ = T_w_c;
@@ -53,6 +59,7 @@ void MotionState::restart(int64_t t_ns) {
   lost_since_ns_ = -1;
   last_ns_ = t_ns;
   velocity_.setZero();
+  has_velocity_ = false;
   ++reset_counter_;
   ++counters_.resets;
 }

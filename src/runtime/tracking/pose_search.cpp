@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace rgbdtam {
 namespace {
@@ -12,11 +13,18 @@ namespace {
 constexpr double kGuessTurnStepRad = 4.0 * M_PI / 180.0;
 constexpr int kMaxGuessTurns = 4;  // 16 degrees: 480 deg/s over one 30 Hz frame
 constexpr int kMaxGuesses = 5 + 6 * kMaxGuessTurns;
+// A probe worth refining fits at most this much worse than the pose at the probing level.
+constexpr double kProbeRatio = 1.5;
+// Two minima fit about as well when their mean costs are within this factor.
+constexpr double kAmbiguityRatio = 1.5;
+constexpr int kProbeLevel = 2;
+constexpr int kMaxProbes = 96;
 }  // namespace
 
 void PoseSearch::allocate(const Keyframe& capacity_model, const TrackerOptions& tracker,
-                          const HealthLimits& health) {
+                          const HealthLimits& health, double alias_range_m) {
   health_ = health;
+  alias_range_m_ = alias_range_m;
   tracker_.allocate(capacity_model, tracker);
 }
 
@@ -24,43 +32,209 @@ uint32_t PoseSearch::failed_checks(const TrackResult& r, Keyframe* kf, const Fra
                                    const MotionState& motion, int64_t t_ns) {
   const HealthContext context = motion.context(kf->T_w_k * r.T_k_c, t_ns, typical_.photometric[0]);
   uint32_t failed = failed_health_checks(r, context, health_);
+
   // From an uncertain guess (after a loss) the planes of a plain scene can fit another place
   // too: the same test, along the direction the depth determines worst.
   const bool uncertain_guess = !motion.previous_valid();
   if (failed == 0 && (r.depth_degenerate || uncertain_guess) &&
-      !unique_along_weak_direction(r, kf, frame)) {
+      !unique_along_weak_direction(r, kf, frame, motion, t_ns)) {
     failed |= kWeakDirection;
   }
   return failed;
 }
 
 bool PoseSearch::unique_along_weak_direction(const TrackResult& r, Keyframe* kf,
-                                             const FramePyramid& frame) {
+                                             const FramePyramid& frame, const MotionState& motion,
+                                             int64_t t_ns) {
   // A direction the depth leaves free rests on the image alone, and a texture-poor image can
   // hold several minima along it within one frame's motion (doors along a corridor). The pose
-  // stands only if tracking from starts half a frame's largest motion to either side along that
-  // direction comes back to it.
+  // stands unless tracking from starts half a frame's largest motion to either side along that
+  // direction finds another pose that passes every check; after a loss, where the pose itself
+  // came from an uncertain guess, unless both come back to it.
+  const bool uncertain_guess = !motion.previous_valid();
   constexpr double kFramePeriodS = 1.0 / 30.0;
-  constexpr double kSameM = 0.02, kSameRad = 1.0 * M_PI / 180.0;
   const double step_m = 0.5 * health_.max_speed_m_s * kFramePeriodS;
   for (const double sign : {-1.0, 1.0}) {
     const SE3 start = r.T_k_c * SE3::exp(r.weak_direction * (sign * step_m));
     const TrackResult other = tracker_.track(*kf, frame, start, typical_, r.terms);
-    const SE3 d = r.T_k_c.inverse() * other.T_k_c;
-    if (!(d.translation().norm() <= kSameM && so3_log(d.quaternion()).norm() <= kSameRad)) {
+    if (!same_pose(r.T_k_c, other.T_k_c) &&
+        (uncertain_guess ||
+         failed_health_checks(
+             other, motion.context(kf->T_w_k * other.T_k_c, t_ns, typical_.photometric[0]),
+             health_) == 0)) {
       return false;
     }
   }
   return true;
 }
 
-Attempt PoseSearch::track(Keyframe* kf, const FramePyramid& frame, const SE3& T_w_guess,
-                          const MotionState& motion, int64_t t_ns) {
+Attempt PoseSearch::judged(Keyframe* kf, const FramePyramid& frame, const TrackResult& r,
+                           const MotionState& motion, int64_t t_ns) {
   Attempt a;
   a.kf = kf;
-  a.r = tracker_.track(*kf, frame, kf->T_w_k.inverse() * T_w_guess, typical_);
-  a.failed = failed_checks(a.r, kf, frame, motion, t_ns);
+  a.r = r;
+  a.failed = failed_checks(r, kf, frame, motion, t_ns);
+  if (a.failed == 0) resolve_within_reach(&a, frame, motion, t_ns);
   return a;
+}
+
+bool PoseSearch::reach(const MotionState& motion, int64_t t_ns, Reach* out) const {
+  if (!motion.has_last() || t_ns <= motion.last_ns()) return false;
+  const double dt = motion.seconds_since_last(t_ns);
+  if (motion.has_velocity()) {
+    out->centre_w = motion.predict(t_ns).translation();
+    out->radius_m = prediction_reach_m(dt, health_);
+  } else {
+    out->centre_w = motion.T_w_last().translation();
+    out->radius_m = health_.max_speed_m_s * dt;
+  }
+  return true;
+}
+
+double PoseSearch::fit(const Keyframe& kf, const FramePyramid& frame, const SE3& T_k_c, int level,
+                       const ReferenceScales& scales, uint8_t terms) {
+  const double zero = 0.0;
+  double cost = 0.0;
+  tracker_.profile(kf, frame, T_k_c, Vector6d::Zero(), &zero, 1, level, scales, terms, &cost);
+  return cost;
+}
+
+int PoseSearch::aliases_within(const Attempt& a, const Reach& within, Candidate* out) const {
+  const KeyframeAliases& aliases = a.kf->aliases;
+  int n = 0;
+  for (int j = 0; j < aliases.count; ++j) {
+    for (const double sign : {-1.0, 1.0}) {
+      // The pose moved by the alias in the keyframe's frame: the world repeats there.
+      const SE3 T_k_c = SE3(Eigen::Quaterniond::Identity(), sign * aliases.shift_k[j]) * a.r.T_k_c;
+      if (((a.kf->T_w_k * T_k_c).translation() - within.centre_w).norm() <= within.radius_m) {
+        out[n++] = {T_k_c, 0.0};
+      }
+    }
+  }
+  return n;
+}
+
+void PoseSearch::resolve_within_reach(Attempt* a, const FramePyramid& frame,
+                                      const MotionState& motion, int64_t t_ns) {
+  Reach within;
+  if (!reach(motion, t_ns, &within)) return;
+  const Keyframe& kf = *a->kf;
+  // The keyframe's aliases were looked for only so far: a reach beyond that could hold others.
+  if (kf.aliases.count > 0 && within.radius_m > alias_range_m_) {
+    a->failed |= kAmbiguous;
+    ++counters_.ambiguous;
+    return;
+  }
+  // Candidates: the keyframe's aliases within reach, each looked at; then the other minima the
+  // probes find, the comparable ones.
+  Candidate* candidates = candidates_;
+  const int from_aliases = aliases_within(*a, within, candidates);
+  const int probed =
+      probe_within(*a, frame, within, candidates + from_aliases, kMaxCandidates - from_aliases);
+  if (from_aliases + probed == 0) return;
+  // Each refined as tracking would, from there; the distinct healthy minima are compared at
+  // the finest level. A probed one not refined (too many) could be the right one: ambiguous.
+  ReferenceScales scales;
+  for (float& s : scales.photometric) s = kProbeSigma;
+  Attempt best = *a;
+  double best_cost = fit(kf, frame, a->r.T_k_c, 0, scales, a->r.terms);
+  double runner_up = std::numeric_limits<double>::infinity();
+  SE3 seen[kMaxCandidates + 1] = {a->r.T_k_c};
+  int distinct = 1;
+  const int refined = from_aliases + std::min(probed, kMaxRefined);
+  for (int i = 0; i < refined; ++i) {
+    Attempt b;
+    b.kf = a->kf;
+    b.r = tracker_.track(kf, frame, candidates[i].T_k_c, typical_, a->r.terms);
+    b.failed = failed_health_checks(b.r, motion.context(b.T_w_c(), t_ns, typical_.photometric[0]),
+                                    health_);
+    bool repeated = false;
+    for (int k = 0; k < distinct; ++k) repeated = repeated || same_pose(b.r.T_k_c, seen[k]);
+    if (b.failed != 0 || repeated) continue;
+    seen[distinct++] = b.r.T_k_c;
+    const double cost = fit(kf, frame, b.r.T_k_c, 0, scales, a->r.terms);
+    if (cost < best_cost) {
+      runner_up = best_cost;
+      best = b;
+      best_cost = cost;
+    } else {
+      runner_up = std::min(runner_up, cost);
+    }
+  }
+  if (probed > kMaxRefined || runner_up < kAmbiguityRatio * best_cost) {
+    a->failed |= kAmbiguous;
+    ++counters_.ambiguous;
+    return;
+  }
+  if (!same_pose(best.r.T_k_c, a->r.T_k_c)) {
+    *a = best;
+    ++counters_.better_within_reach;
+  }
+}
+
+int PoseSearch::probe_within(const Attempt& a, const FramePyramid& frame, const Reach& within,
+                             Candidate* out, int room) {
+  const Keyframe& kf = *a.kf;
+  ReferenceScales scales;
+  for (float& s : scales.photometric) s = kProbeSigma;
+  // The scene's depth sets how far a pixel's motion is: probes a pixel apart at 160x120 (a
+  // minimum's basin is a pixel or two there), or at 80x60 when the reach needs more than
+  // kMaxProbes of them, spread further apart if even that is not enough.
+  constexpr int kSample = 256;
+  float depths[kSample];
+  const TrackPoints& pts = kf.photometric(0).size() > 0 ? kf.photometric(0) : kf.geometric[0];
+  if (pts.size() == 0) return 0;
+  const int stride = std::max(1, pts.size() / kSample);
+  int n = 0;
+  for (int i = 0; i < pts.size() && n < kSample; i += stride) depths[n++] = pts.z()[i];
+  std::nth_element(depths, depths + n / 2, depths + n);
+  const double depth = depths[n / 2];
+  int level = kProbeLevel;
+  while (level < kPyramidLevels - 1 &&
+         2.0 * within.radius_m / (depth / frame.intrinsics(level).fx_px) > kMaxProbes - 1) {
+    ++level;
+  }
+  const double spacing =
+      std::max(depth / frame.intrinsics(level).fx_px, 2.0 * within.radius_m / (kMaxProbes - 1));
+  const Vector3d centre_c = a.T_w_c().inverse() * within.centre_w;
+  // Probed on the image term, whose repeated texture makes the other minima (the depth term,
+  // four times the points at these levels, is smooth along them), along the directions the
+  // depth determines least first: the surfaces' own, along which a texture repeats.
+  const uint8_t terms =
+      (a.r.terms & kPhotometricTerm) != 0 ? static_cast<uint8_t>(kPhotometricTerm) : a.r.terms;
+  double lowest = fit(kf, frame, a.r.T_k_c, level, scales, terms);
+  int found = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    double offsets[kMaxProbes], costs[kMaxProbes];
+    int m = 0;
+    const double centre = a.r.depth_translation_axes.col(axis).dot(centre_c);
+    for (double s = centre - within.radius_m;
+         s <= centre + within.radius_m + 1e-9 && m < kMaxProbes; s += spacing) {
+      offsets[m++] = s;
+    }
+    Vector6d d = Vector6d::Zero();
+    d.head<3>() = a.r.depth_translation_axes.col(axis);
+    tracker_.profile(kf, frame, a.r.T_k_c, d, offsets, m, level, scales, terms, costs);
+    for (int i = 0; i < m && found < room; ++i) {
+      const bool minimum =
+          (i == 0 || costs[i] <= costs[i - 1]) && (i == m - 1 || costs[i] <= costs[i + 1]);
+      if (!minimum || std::fabs(offsets[i]) < kSamePoseM) continue;
+      out[found++] = {a.r.T_k_c * SE3(Eigen::Quaterniond::Identity(), d.head<3>() * offsets[i]),
+                      costs[i]};
+      lowest = std::min(lowest, costs[i]);
+    }
+  }
+  // Worth a closer look: those that fit about as well as the best at the probing level.
+  std::sort(out, out + found,
+            [](const Candidate& x, const Candidate& y) { return x.cost < y.cost; });
+  while (found > 0 && !(out[found - 1].cost <= kProbeRatio * lowest)) --found;
+  return found;
+}
+
+Attempt PoseSearch::track(Keyframe* kf, const FramePyramid& frame, const SE3& T_w_guess,
+                          const MotionState& motion, int64_t t_ns) {
+  return judged(kf, frame, tracker_.track(*kf, frame, kf->T_w_k.inverse() * T_w_guess, typical_),
+                motion, t_ns);
 }
 
 Attempt PoseSearch::first(Keyframe* kf, const FramePyramid& frame, const MotionState& motion,
@@ -99,11 +273,7 @@ Attempt PoseSearch::from_guesses(Keyframe* kf, const FramePyramid& frame, const 
       }
     }
   }
-  Attempt a;
-  a.kf = kf;
-  a.r = tracker_.track_best(*kf, frame, guesses, n, typical_);
-  a.failed = failed_checks(a.r, kf, frame, motion, t_ns);
-  return a;
+  return judged(kf, frame, tracker_.track_best(*kf, frame, guesses, n, typical_), motion, t_ns);
 }
 
 Attempt PoseSearch::without_misfit_term(const Attempt& a, const FramePyramid& frame,
@@ -117,10 +287,8 @@ Attempt PoseSearch::without_misfit_term(const Attempt& a, const FramePyramid& fr
     return a;
   }
   const uint8_t keep = misfit == kPhotometricMisfit ? kGeometricTerm : kPhotometricTerm;
-  Attempt b;
-  b.kf = a.kf;
-  b.r = tracker_.track(*a.kf, frame, a.r.T_k_c, typical_, keep);
-  b.failed = failed_checks(b.r, a.kf, frame, motion, t_ns);
+  const Attempt b =
+      judged(a.kf, frame, tracker_.track(*a.kf, frame, a.r.T_k_c, typical_, keep), motion, t_ns);
   if (b.failed == 0) ++counters_.single_term;
   return b.failed == 0 ? b : a;
 }

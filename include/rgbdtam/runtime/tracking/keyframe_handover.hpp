@@ -103,8 +103,12 @@ class KeyframeHandover {
   Keyframe* find(uint32_t id);
   bool pose_of(uint32_t id, SE3* T_w_k) const;
   // Up to `wanted` keyframes other than the reference nearest to T_w_c, nearest first (a radian
-  // of rotation counted as 0.3 m).
+  // of rotation counted as 0.3 m), of those in the estimate's frame.
   int nearest(const SE3& T_w_c, int wanted, Keyframe** out);
+  // A restart places the camera at its last valid pose, not where it is: the keyframes before
+  // it are in another frame until a relocalisation or a loop correction joins the two.
+  void restarted() { oldest_in_frame_id_ = next_keyframe_id_; }
+  void joined() { oldest_in_frame_id_ = 0; }
   bool pinned(const Keyframe* kf) const { return pool_->pinned(kf); }
   const KeyframePool& pool() const { return *pool_; }
 
@@ -124,11 +128,14 @@ class KeyframeHandover {
   KeyframePool* pool_ = nullptr;
   KeyframeBuildTask* building_ = nullptr;
   KeyframeBuilder builder_;  // the last valid frame's keyframe while tracking fails, at once
+  KeyframeAliasFinder aliases_;
+  double alias_range_m_ = 0.0;
   MapperQueue* mapper_queue_ = nullptr;
   Keyframe* reference_ = nullptr;
   Keyframe* fallback_ = nullptr;  // built from the last valid frame while tracking fails
   PendingKeyframe pending_;
   uint32_t next_keyframe_id_ = 0;
+  uint32_t oldest_in_frame_id_ = 0;  // keyframes before it: not in the estimate's frame
   // The last two keyframe maps the tracker adopted, copied into each keyframe order.
   LocalMap local_maps_[KeyframeBuildTask::kLocalMaps];
   int next_local_map_ = 0;

@@ -28,6 +28,9 @@ class MotionState {
   int64_t last_ns() const { return last_ns_; }
   int64_t last_tracked_ns() const { return has_last_ ? last_ns_ : -1; }
   bool previous_valid() const { return previous_valid_; }
+  // The velocity was measured between two valid poses close in time: the prediction holds up to
+  // the camera's acceleration.
+  bool has_velocity() const { return has_velocity_; }
   uint32_t reset_counter() const { return reset_counter_; }
   double seconds_since_last(int64_t t_ns) const {
     return static_cast<double>(t_ns - last_ns_) * 1e-9;
@@ -72,6 +75,7 @@ class MotionState {
   SE3 T_w_last_;
   int64_t last_ns_ = 0;
   Vector6d velocity_ = Vector6d::Zero();  // twist (v, omega) per second before the last pose
+  bool has_velocity_ = false;
   bool has_last_ = false;
   bool previous_valid_ = false;
   int64_t lost_since_ns_ = -1;  // the first lost frame of the current loss; -1 when tracking

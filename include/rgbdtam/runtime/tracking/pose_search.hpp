@@ -6,6 +6,7 @@
 
 #include <cstdint>
 
+#include "rgbdtam/core/keyframe_aliases.hpp"
 #include "rgbdtam/core/tracker.hpp"
 #include "rgbdtam/core/tracking_health.hpp"
 #include "rgbdtam/runtime/tracking/motion_priors.hpp"
@@ -22,13 +23,16 @@ struct Attempt {
 };
 
 struct SearchCounters {
-  uint32_t single_term = 0;  // frames whose pose came from one term, the other not fitting
+  uint32_t single_term = 0;          // frames whose pose came from one term, the other not fitting
+  uint32_t better_within_reach = 0;  // poses replaced by a clearly better one within reach
+  uint32_t ambiguous = 0;            // poses with another within reach that fits about as well
 };
 
 class PoseSearch {
  public:
+  // alias_range_m: how far the keyframes' aliases are looked for.
   void allocate(const Keyframe& capacity_model, const TrackerOptions& tracker,
-                const HealthLimits& health);
+                const HealthLimits& health, double alias_range_m);
 
   // From one guess of the camera in the world.
   Attempt track(Keyframe* kf, const FramePyramid& frame, const SE3& T_w_guess,
@@ -53,12 +57,48 @@ class PoseSearch {
   const SearchCounters& counters() const { return counters_; }
 
  private:
+  // The result's health checks and, for a healthy one, the other minima within reach.
+  Attempt judged(Keyframe* kf, const FramePyramid& frame, const TrackResult& r,
+                 const MotionState& motion, int64_t t_ns);
   uint32_t failed_checks(const TrackResult& r, Keyframe* kf, const FramePyramid& frame,
                          const MotionState& motion, int64_t t_ns);
-  bool unique_along_weak_direction(const TrackResult& r, Keyframe* kf, const FramePyramid& frame);
+  // Where the camera can be at t_ns: within the reach of its acceleration around the
+  // prediction or, without a velocity, of its speed around the last pose; false before any.
+  struct Reach {
+    Vector3d centre_w;
+    double radius_m = 0.0;
+  };
+  bool reach(const MotionState& motion, int64_t t_ns, Reach* out) const;
+  // A pose another minimum could be, and how well it fits at the probing level.
+  struct Candidate {
+    SE3 T_k_c;
+    double cost = 0.0;
+  };
+  // The pose moved by each of the keyframe's aliases that lands within reach, into out.
+  int aliases_within(const Attempt& a, const Reach& within, Candidate* out) const;
+  // The other minima probes along the surfaces' directions find within reach that fit about
+  // as well as the best at the probing level, best first; at most room of them.
+  int probe_within(const Attempt& a, const FramePyramid& frame, const Reach& within, Candidate* out,
+                   int room);
+  // Looks for the other minima within reach along the camera's axes: a clearly better one
+  // replaces the pose; one that fits about as well makes it ambiguous.
+  void resolve_within_reach(Attempt* a, const FramePyramid& frame, const MotionState& motion,
+                            int64_t t_ns);
+  // How well the keyframe's points fit the frame at a pose: their mean robust cost at fixed
+  // scales, at one level.
+  double fit(const Keyframe& kf, const FramePyramid& frame, const SE3& T_k_c, int level,
+             const ReferenceScales& scales, uint8_t terms);
+  bool unique_along_weak_direction(const TrackResult& r, Keyframe* kf, const FramePyramid& frame,
+                                   const MotionState& motion, int64_t t_ns);
+
+  // Aliases within reach (both signs) and local minima of three profiles.
+  static constexpr int kMaxCandidates = 2 * KeyframeAliases::kMax + 3 * 16;
+  static constexpr int kMaxRefined = 4;  // probed candidates refined by tracking
 
   Tracker tracker_;
+  Candidate candidates_[kMaxCandidates];
   HealthLimits health_;
+  double alias_range_m_ = 0.0;
   ReferenceScales typical_;  // slow averages over healthy frames
   SearchCounters counters_;
 };

@@ -1,0 +1,63 @@
+// A keyframe's aliases: where its image matches itself shifted along the surfaces it sees.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "repeated_scene.hpp"
+#include "rgbdtam/core/keyframe_aliases.hpp"
+#include "synthetic_scene.hpp"
+#include "tum_writer.hpp"
+
+namespace rgbdtam {
+namespace {
+
+// The keyframe of frame 0 and its aliases within range_m.
+KeyframeAliases aliases_of(const testing::SyntheticFrame& f, const PinholeIntrinsics& camera,
+                           double depth_factor, double range_m) {
+  testing::SyntheticScene like;
+  like.camera = camera;
+  like.depth_factor = depth_factor;
+  Params p = testing::synthetic_params(like);
+  p.tracker = tracking_options(p);
+  FramePyramid own;
+  own.allocate(p.camera, p.sensor.depth_factor, p.sensor.depth_range);
+  Undistorter undistorter;
+  undistorter.init(p.camera, p.distortion);
+  undistorter.undistort_gray(f.gray.data(), &own.gray(0));
+  own.build_gray();
+  own.build_inverse_depth(f.depth.data(), undistorter);
+  KeyframeBuilder builder;
+  builder.allocate(p.camera, p.tracker);
+  Keyframe kf;
+  builder.allocate_keyframe(&kf);
+  builder.build(own, 0, 0, SE3(), &kf);
+  KeyframeAliasFinder finder;
+  finder.allocate(kf, p.tracker);
+  KeyframeAliases out;
+  finder.find(own, kf, range_m, &out);
+  return out;
+}
+
+TEST(KeyframeAliases, ATiledWallRepeatsOneTileAwayAlongTheWallAndATexturedRoomDoesNot) {
+  // 15 cm tiles 60 cm away, at half resolution.
+  testing::RepeatedScene tiles;
+  ASSERT_TRUE(testing::RepeatedScene::named("tiles15_d06_10hz_noisy", &tiles));
+  tiles.camera = testing::SyntheticScene::half_resolution().camera;
+  const KeyframeAliases a = aliases_of(tiles.render(0), tiles.camera, tiles.depth_factor, 0.6);
+  ASSERT_GT(a.count, 0);
+  // Every alias is a whole number of tiles along the wall (the first camera's x).
+  bool one_tile = false;
+  for (int i = 0; i < a.count; ++i) {
+    const Vector3d& s = a.shift_k[i];
+    const double tiles_along = s.norm() / 0.15;
+    EXPECT_NEAR(tiles_along, std::round(tiles_along), 0.1) << s.transpose();
+    one_tile = one_tile || std::fabs(s.norm() - 0.15) < 0.01;
+  }
+  EXPECT_TRUE(one_tile) << "the nearest alias, one tile away, is found";
+  // The textured room with its box: nothing repeats.
+  const testing::SyntheticScene room = testing::SyntheticScene::half_resolution();
+  EXPECT_EQ(aliases_of(room.render(SE3()), room.camera, room.depth_factor, 0.6).count, 0);
+}
+
+}  // namespace
+}  // namespace rgbdtam
