@@ -64,7 +64,7 @@ for t in "${targets[@]}"; do
     map_file)
       build "$t" src/core/*.cpp src/runtime/map_file.cpp src/runtime/place_recognition.cpp \
         src/runtime/loop_closing.cpp src/runtime/map_checkpoint.cpp src/runtime/params.cpp \
-        src/runtime/key_value.cpp src/runtime/latency_stats.cpp tests/fuzz/fuzz_map_file.cpp ;;
+        src/runtime/key_value.cpp src/port/latency_stats.cpp tests/fuzz/fuzz_map_file.cpp ;;
     *) echo "unknown fuzz target $t" >&2; exit 2 ;;
   esac
   corpus="$out/corpus_$t"

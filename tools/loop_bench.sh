@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Loop closure and relocalisation, the figures of the README's section (all frames unless said;
+# Loop closure and relocalisation, the figures of docs/loop-closure.md (all frames unless said;
 # false-valid as in rgbdtam eval; "final map" = every tracked frame placed on its keyframe as the
 # map has it at the end, after every correction):
 #   - kidnapping: fr1_xyz with 30, 60, 100 and 150 frames cut at frames 150, 300, 450 and 600:

@@ -39,8 +39,10 @@ void usage() {
       "                 [--set key=value]... [--max-frames N] [--paced] [--trace out.csv]\n"
       "                 [--quiet] [--json]\n"
       "  rgbdtam eval <groundtruth.txt> <estimate.txt> [--json] [--frames rgb.txt]\n"
-      "               [--plot out.svg]\n"
-      "  rgbdtam params --config <file> [--set key=value]...\n"
+      "               [--plot out.svg] [--covariance est.cov]\n"
+      "  rgbdtam params --config <file> [--set key=value]... [--markdown]\n"
+      "  rgbdtam params --board <board-folder> [--board-set key=value]... [--set key=value]...\n"
+      "  rgbdtam params --defaults [--markdown]\n"
       "  rgbdtam run --board <board-folder> [--board-set key=value]...\n"
       "              [--set key=value]... [--max-frames N] [--quiet]\n"
       "  rgbdtam check --board <board-folder> [--board-set key=value]... [--set key=value]...\n"
@@ -98,22 +100,55 @@ Status load_params(const ConfigArgs& c, Params* p) {
   return Status::ok();
 }
 
+// --config: that file's values; --board: the board's keys, then its params file's values as
+// it runs them; --defaults: every key's default (the schema, as docs/configuration.md lists it).
 int params_command(int argc, char** argv) {
   ConfigArgs c;
+  RunOptions board_options;
+  KeyListing listing = KeyListing::kFile;
+  bool defaults = false;
   for (int i = 0; i < argc; ++i) {
-    if (!take_config_arg(argc, argv, &i, &c)) {
+    const bool has_value = i + 1 < argc;
+    if (std::strcmp(argv[i], "--markdown") == 0) {
+      listing = KeyListing::kMarkdown;
+    } else if (std::strcmp(argv[i], "--defaults") == 0) {
+      defaults = true;
+    } else if (std::strcmp(argv[i], "--board") == 0 && has_value) {
+      board_options.board_dir = argv[++i];
+    } else if (std::strcmp(argv[i], "--board-set") == 0 && has_value &&
+               board_options.board_override_count < RunOptions::kMaxOverrides) {
+      board_options.board_overrides[board_options.board_override_count++] = argv[++i];
+    } else if (!take_config_arg(argc, argv, &i, &c)) {
       std::fprintf(stderr, "rgbdtam params: unknown argument '%s'\n", argv[i]);
       return 2;
     }
   }
+  Board board;
   Params p;
-  const Status s = load_params(c, &p);
+  Status s;
+  if (c.override_count > RunOptions::kMaxOverrides) {
+    s = Status::error(StatusCode::kInvalidArgument, "more than %d --set",
+                      RunOptions::kMaxOverrides);
+  } else if (board_options.board_dir != nullptr) {
+    for (int i = 0; i < c.override_count; ++i) {
+      board_options.param_overrides[board_options.param_override_count++] = c.overrides[i];
+    }
+    s = c.config == nullptr ? load_board_and_params(board_options, &board, &p)
+                            : Status::error(StatusCode::kInvalidArgument,
+                                            "--board names its params file: no --config with it");
+  } else if (!defaults) {
+    s = load_params(c, &p);
+  }
   if (!s.is_ok()) {
     std::fprintf(stderr, "rgbdtam params: %s\n", s.message());
     return 1;
   }
-  static char buf[16384];
-  print_params(p, buf, sizeof(buf));
+  static char buf[32768];
+  if (defaults || board_options.board_dir != nullptr) {
+    print_board(board, buf, sizeof(buf), listing);
+    std::printf("%s%s", buf, listing == KeyListing::kMarkdown ? "\n" : "");
+  }
+  print_params(p, buf, sizeof(buf), listing);
   std::fputs(buf, stdout);
   return 0;
 }

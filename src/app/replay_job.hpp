@@ -10,7 +10,7 @@
 #include "rgbdtam/core/evaluation.hpp"
 #include "rgbdtam/hal/tum_replay_source.hpp"
 #include "rgbdtam/hal/tum_trajectory.hpp"
-#include "rgbdtam/runtime/latency_stats.hpp"
+#include "rgbdtam/port/latency_stats.hpp"
 #include "rgbdtam/runtime/slam_system.hpp"
 
 namespace rgbdtam {

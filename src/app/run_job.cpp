@@ -14,6 +14,7 @@
 #include "loop_summary.hpp"
 #include "map_files.hpp"
 #include "memory_budget.hpp"
+#include "rgbdtam/core/assert.hpp"
 #include "rgbdtam/hal/clock.hpp"
 #include "rgbdtam/hal/file.hpp"
 #include "rgbdtam/hal/serial_link.hpp"
@@ -68,76 +69,106 @@ namespace {
 // How long a device backend waits for a frame before next() reports it (a stall is longer).
 constexpr int kFrameTimeoutMs = 1000;
 
+Status open_replay(const Board& board, const Params& params, BoardSensor* sensor) {
+  const int w = params.camera.width_px, h = params.camera.height_px;
+  RGBDTAM_RETURN_IF_ERROR(sensor->replay.open(board.sensor_device, w, h,
+                                              params.sensor.max_rgb_depth_dt_ns,
+                                              params.sensor.depth_time_offset_ns));
+  sensor->replay_sensor.open(&sensor->replay, w, h);
+  sensor->live = &sensor->replay_sensor;
+  return Status::ok();
+}
+
+Status open_v4l2(const Board& board, const Params& params, BoardSensor* sensor, V4l2Io* v4l2_io) {
+  // sensor.device = <depth node>,<colour node>
+  char depth[kTextBytes];
+  const char* comma = std::strchr(board.sensor_device, ',');
+  if (comma == nullptr) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "board '%s': sensor.device for v4l2 is '<depth node>,<colour node>'",
+                         board.name);
+  }
+  std::snprintf(depth, sizeof(depth), "%.*s", static_cast<int>(comma - board.sensor_device),
+                board.sensor_device);
+  RGBDTAM_RETURN_IF_ERROR(sensor->v4l2.open(
+      v4l2_io != nullptr ? v4l2_io : &sensor->v4l2_io, depth, comma + 1, params.camera.width_px,
+      params.camera.height_px, params.sensor.max_rgb_depth_dt_ns, kFrameTimeoutMs,
+      std::strcmp(board.sensor_colour, "mjpeg") == 0 ? V4l2Colour::kMjpeg : V4l2Colour::kYuyv));
+  sensor->live = &sensor->v4l2;
+  return Status::ok();
+}
+
+#if RGBDTAM_WITH_FREENECT
+Status open_freenect(const Board& board, BoardSensor* sensor) {
+  const FreenectDepth mode = std::strcmp(board.sensor_depth, "raw") == 0
+                                 ? FreenectDepth::kRaw
+                                 : FreenectDepth::kRegistered;
+  // libfreenect does not document its timestamp unit: the latest of each stream pair up.
+  RGBDTAM_RETURN_IF_ERROR(sensor->freenect.open(kFreenectUsbDriver, std::atoi(board.sensor_device),
+                                                mode, UINT32_MAX / 2));
+  sensor->live = &sensor->freenect;
+  return Status::ok();
+}
+#endif
+
+#if RGBDTAM_WITH_FAKENECT
+Status open_fakenect(const Board& board, BoardSensor* sensor) {
+  // fakenect finds its dump through the environment, plays raw disparity only, plays it once
+  // per process, and exits the process when it cannot open the index: checked here first.
+  char index[kTextBytes + 16];
+  std::snprintf(index, sizeof(index), "%s/INDEX.txt", board.sensor_device);
+  std::FILE* file = std::fopen(index, "rb");
+  if (file == nullptr) {
+    return Status::error(StatusCode::kNotFound,
+                         "board '%s': sensor.device '%s' is not a fakenect dump (no INDEX.txt)",
+                         board.name, board.sensor_device);
+  }
+  std::fclose(file);
+  setenv("FAKENECT_PATH", board.sensor_device, 1);
+  RGBDTAM_RETURN_IF_ERROR(
+      sensor->freenect.open(kFakenectDriver, 0, FreenectDepth::kRaw, UINT32_MAX / 2));
+  sensor->live = &sensor->freenect;
+  return Status::ok();
+}
+#endif
+
+#if RGBDTAM_WITH_OPENNI2
+Status open_openni2(const Board& board, const Params& params, BoardSensor* sensor) {
+  RGBDTAM_RETURN_IF_ERROR(sensor->openni2.open(board.sensor_device, params.camera.width_px,
+                                               params.camera.height_px,
+                                               static_cast<int>(std::lround(board.sensor_fps)),
+                                               params.sensor.max_rgb_depth_dt_ns, kFrameTimeoutMs));
+  sensor->live = &sensor->openni2;
+  return Status::ok();
+}
+#endif
+
+// The board's backend, by its kind (validate_board has checked that the board names one); a
+// kind this build lacks is an error naming the build's.
 Status open_backend(const Board& board, const Params& params, BoardSensor* sensor,
                     V4l2Io* v4l2_io) {
-  const int w = params.camera.width_px, h = params.camera.height_px;
-  if (std::strcmp(board.sensor_kind, "replay") == 0) {
-    RGBDTAM_RETURN_IF_ERROR(sensor->replay.open(board.sensor_device, w, h,
-                                                params.sensor.max_rgb_depth_dt_ns,
-                                                params.sensor.depth_time_offset_ns));
-    sensor->replay_sensor.open(&sensor->replay, w, h);
-    sensor->live = &sensor->replay_sensor;
-    return Status::ok();
-  }
-  if (std::strcmp(board.sensor_kind, "v4l2") == 0) {
-    // sensor.device = <depth node>,<colour node>
-    char depth[kTextBytes];
-    const char* comma = std::strchr(board.sensor_device, ',');
-    if (comma == nullptr) {
-      return Status::error(StatusCode::kInvalidArgument,
-                           "board '%s': sensor.device for v4l2 is '<depth node>,<colour node>'",
-                           board.name);
-    }
-    std::snprintf(depth, sizeof(depth), "%.*s", static_cast<int>(comma - board.sensor_device),
-                  board.sensor_device);
-    RGBDTAM_RETURN_IF_ERROR(sensor->v4l2.open(
-        v4l2_io != nullptr ? v4l2_io : &sensor->v4l2_io, depth, comma + 1, w, h,
-        params.sensor.max_rgb_depth_dt_ns, kFrameTimeoutMs,
-        std::strcmp(board.sensor_colour, "mjpeg") == 0 ? V4l2Colour::kMjpeg : V4l2Colour::kYuyv));
-    sensor->live = &sensor->v4l2;
-    return Status::ok();
-  }
+  const SensorKindName* kind = find_sensor_kind(board.sensor_kind);
+  RGBDTAM_ASSERT(kind != nullptr, "validate_board accepts only the kinds of kSensorKinds");
+  switch (kind->kind) {
+    case SensorKind::kReplay:
+      return open_replay(board, params, sensor);
+    case SensorKind::kV4l2:
+      return open_v4l2(board, params, sensor, v4l2_io);
 #if RGBDTAM_WITH_FREENECT
-  if (std::strcmp(board.sensor_kind, "freenect") == 0) {
-    const FreenectDepth mode = std::strcmp(board.sensor_depth, "raw") == 0
-                                   ? FreenectDepth::kRaw
-                                   : FreenectDepth::kRegistered;
-    // libfreenect does not document its timestamp unit: the latest of each stream pair up.
-    RGBDTAM_RETURN_IF_ERROR(
-        sensor->freenect.open(kFreenectUsb, std::atoi(board.sensor_device), mode, UINT32_MAX / 2));
-    sensor->live = &sensor->freenect;
-    return Status::ok();
-  }
+    case SensorKind::kFreenect:
+      return open_freenect(board, sensor);
 #endif
 #if RGBDTAM_WITH_FAKENECT
-  if (std::strcmp(board.sensor_kind, "fakenect") == 0) {
-    // fakenect finds its dump through the environment, plays raw disparity only, plays it once
-    // per process, and exits the process when it cannot open the index: checked here first.
-    char index[kTextBytes + 16];
-    std::snprintf(index, sizeof(index), "%s/INDEX.txt", board.sensor_device);
-    std::FILE* file = std::fopen(index, "rb");
-    if (file == nullptr) {
-      return Status::error(StatusCode::kNotFound,
-                           "board '%s': sensor.device '%s' is not a fakenect dump (no INDEX.txt)",
-                           board.name, board.sensor_device);
-    }
-    std::fclose(file);
-    setenv("FAKENECT_PATH", board.sensor_device, 1);
-    RGBDTAM_RETURN_IF_ERROR(
-        sensor->freenect.open(kFakenect, 0, FreenectDepth::kRaw, UINT32_MAX / 2));
-    sensor->live = &sensor->freenect;
-    return Status::ok();
-  }
+    case SensorKind::kFakenect:
+      return open_fakenect(board, sensor);
 #endif
 #if RGBDTAM_WITH_OPENNI2
-  if (std::strcmp(board.sensor_kind, "openni2") == 0) {
-    RGBDTAM_RETURN_IF_ERROR(sensor->openni2.open(
-        board.sensor_device, w, h, static_cast<int>(std::lround(board.sensor_fps)),
-        params.sensor.max_rgb_depth_dt_ns, kFrameTimeoutMs));
-    sensor->live = &sensor->openni2;
-    return Status::ok();
-  }
+    case SensorKind::kOpenni2:
+      return open_openni2(board, params, sensor);
 #endif
+    default:
+      break;
+  }
   return missing_backend_error(board);
 }
 }  // namespace
@@ -346,7 +377,6 @@ void print_attitude(const FirmwareRuntime& runtime, const PoseLinkCounters& lc) 
 
 void RunJob::print_summary() const {
   const FirmwareCounters& c = runtime_->counters();
-  const LatencyStats& t = runtime_->tracker_time();
   const double seconds = wall_ns_ * 1e-9;
   std::printf("board: %s (%s); sensor %s at %.0f Hz, link %s %s\n", board_.name, board_.description,
               board_.sensor_kind, board_.sensor_fps, board_.link_kind,
@@ -373,73 +403,71 @@ void RunJob::print_summary() const {
               memory_budget(board_.memory_budget_mb).from);
   std::printf("cadence: %u deadline misses (deadline %.1f ms after arrival)\n", c.deadline_misses,
               1e3 / board_.sensor_fps);
-  std::printf("tracker task ms: median %.2f, p95 %.2f, max %.2f\n", t.percentile_ms(0.5),
-              t.percentile_ms(0.95), t.max_ms());
+  print_task_times();
+  print_loop_summary(runtime_->slam());
+  if (board_.map_file[0] != '\0') print_map_file_summary();
+  print_link_summary();
+  std::printf("gpio: status LED %u transitions\n", runtime_->led().transitions());
+}
+
+void RunJob::print_task_times() const {
+  char spread[96];
+  std::printf("tracker task ms: %s\n",
+              runtime_->tracker_time().describe(2, spread, sizeof(spread)));
   const LatencyStats& latency = runtime_->link().arrival_to_odometry();
-  std::printf(
-      "latency, frame arrival to ODOMETRY sent, ms: median %.2f, p95 %.2f, max %.2f over "
-      "%lld\n",
-      latency.percentile_ms(0.5), latency.percentile_ms(0.95), latency.max_ms(),
-      static_cast<long long>(latency.count()));
+  std::printf("latency, frame arrival to ODOMETRY sent, ms: %s over %lld\n",
+              latency.describe(2, spread, sizeof(spread)), static_cast<long long>(latency.count()));
   const MappingModule& m = runtime_->slam().mapper();
   const TrackingCounters& tracking = runtime_->slam().tracking().counters();
   std::printf(
-      "mapper task ms/keyframe: median %.1f, p95 %.1f, max %.1f over %u keyframes; %u frames "
-      "skipped to catch up, %u frames (%u keyframes) dropped at its full queue\n",
-      m.time_per_keyframe().percentile_ms(0.5), m.time_per_keyframe().percentile_ms(0.95),
-      m.time_per_keyframe().max_ms(), m.counters().keyframes_mapped,
+      "mapper task ms/keyframe: %s over %u keyframes; %u frames skipped to catch up, %u frames "
+      "(%u keyframes) dropped at its full queue\n",
+      m.time_per_keyframe().describe(1, spread, sizeof(spread)), m.counters().keyframes_mapped,
       m.counters().frames_skipped_late, tracking.mapper_dropped_frames,
       tracking.mapper_dropped_keyframes);
   const LatencyStats& builds = runtime_->slam().keyframe_building().time_per_keyframe();
   std::printf(
-      "keyframe builder ms/keyframe: median %.1f, p95 %.1f, max %.1f over %lld; %u frames "
-      "tracked against the last keyframe while the next was built, %u built stale\n",
-      builds.percentile_ms(0.5), builds.percentile_ms(0.95), builds.max_ms(),
-      static_cast<long long>(builds.count()), tracking.frames_awaiting_keyframe,
-      tracking.keyframes_stale);
-  print_loop_summary(runtime_->slam());
-  if (board_.map_file[0] != '\0') {
-    std::printf("map file: %s: %u places loaded%s; %s; %u saves while running, %u failed%s%s\n",
-                board_.map_file, loaded_map_.places,
-                params_.map_mode == MapMode::kLocalise ? " (localise: never written)" : "",
-                params_.map_mode == MapMode::kLocalise ? "left as it was"
-                : map_saved_.is_ok()                   ? "saved at the end"
-                                                       : map_saved_.message(),
-                checkpoint_.saves(), checkpoint_.failures(),
-                checkpoint_.failures() > 0 ? ", the last: " : "",
-                checkpoint_.failures() > 0 ? checkpoint_.last_failure().message() : "");
-  }
+      "keyframe builder ms/keyframe: %s over %lld; %u frames tracked against the last keyframe "
+      "while the next was built, %u built stale\n",
+      builds.describe(1, spread, sizeof(spread)), static_cast<long long>(builds.count()),
+      tracking.frames_awaiting_keyframe, tracking.keyframes_stale);
+}
+
+void RunJob::print_map_file_summary() const {
+  const bool localise = params_.map_mode == MapMode::kLocalise;
+  const bool failed = checkpoint_.failures() > 0;
+  std::printf("map file: %s: %u places loaded%s; %s; %u saves while running, %u failed%s%s\n",
+              board_.map_file, loaded_map_.places, localise ? " (localise: never written)" : "",
+              localise             ? "left as it was"
+              : map_saved_.is_ok() ? "saved at the end"
+                                   : map_saved_.message(),
+              checkpoint_.saves(), checkpoint_.failures(), failed ? ", the last: " : "",
+              failed ? checkpoint_.last_failure().message() : "");
+}
+
+void RunJob::print_link_summary() const {
+  using ull = unsigned long long;
   const LinkTask& l = runtime_->link();
   const PoseLinkCounters& lc = l.counters();
   const LinkCounters& tc = link_->counters();
-  std::printf("link task ms/message: median %.3f, p95 %.3f, max %.3f\n",
-              l.time_per_message().percentile_ms(0.5), l.time_per_message().percentile_ms(0.95),
-              l.time_per_message().max_ms());
+  char spread[96];
+  std::printf("link task ms/message: %s\n",
+              l.time_per_message().describe(3, spread, sizeof(spread)));
   std::printf(
       "link: ODOMETRY %llu sent, %llu rate-limited, %llu refused; OBSTACLE_DISTANCE %llu "
-      "sent, %llu rate-limited, %llu refused; HEARTBEAT %llu, "
-      "STATUSTEXT %llu; queue drops %llu; transport tx %llu frames %llu bytes, drops "
-      "%llu, errors %llu\n",
-      static_cast<unsigned long long>(lc.odometry_sent),
-      static_cast<unsigned long long>(lc.odometry_rate_limited),
-      static_cast<unsigned long long>(lc.odometry_refused),
-      static_cast<unsigned long long>(lc.obstacles_sent),
-      static_cast<unsigned long long>(lc.obstacles_rate_limited),
-      static_cast<unsigned long long>(lc.obstacles_refused),
-      static_cast<unsigned long long>(lc.heartbeats_sent),
-      static_cast<unsigned long long>(lc.status_texts_sent),
-      static_cast<unsigned long long>(l.queue_drops()),
-      static_cast<unsigned long long>(tc.tx_frames), static_cast<unsigned long long>(tc.tx_bytes),
-      static_cast<unsigned long long>(tc.drops), static_cast<unsigned long long>(tc.errors));
+      "sent, %llu rate-limited, %llu refused; HEARTBEAT %llu, STATUSTEXT %llu; queue drops %llu; "
+      "transport tx %llu frames %llu bytes, drops %llu, errors %llu\n",
+      ull{lc.odometry_sent}, ull{lc.odometry_rate_limited}, ull{lc.odometry_refused},
+      ull{lc.obstacles_sent}, ull{lc.obstacles_rate_limited}, ull{lc.obstacles_refused},
+      ull{lc.heartbeats_sent}, ull{lc.status_texts_sent}, ull{l.queue_drops()}, ull{tc.tx_frames},
+      ull{tc.tx_bytes}, ull{tc.drops}, ull{tc.errors});
   if (tc.errors > 0) {
     // "Sent" above is what the link was given; say what the transport did not deliver, and why.
     std::printf("link errors: %llu failed calls, %llu queued bytes lost; last: %s\n",
-                static_cast<unsigned long long>(tc.errors),
-                static_cast<unsigned long long>(tc.lost_bytes), std::strerror(tc.last_error));
+                ull{tc.errors}, ull{tc.lost_bytes}, std::strerror(tc.last_error));
   }
   print_peer(l.peer());
   print_attitude(*runtime_, lc);
-  std::printf("gpio: status LED %u transitions\n", runtime_->led().transitions());
 }
 
 }  // namespace rgbdtam

@@ -95,6 +95,9 @@ class RunJob {
   std::unique_ptr<ByteLink> link_;
   std::unique_ptr<GpioOutputs> gpio_;
   Status open_map_file(bool loop);
+  void print_task_times() const;
+  void print_map_file_summary() const;
+  void print_link_summary() const;
 
   std::unique_ptr<FirmwareRuntime> runtime_;
   MapFileInfo loaded_map_;

@@ -4,6 +4,13 @@
 #include <cmath>
 
 namespace rgbdtam {
+
+Eigen::Quaterniond quaternion_from_yaw_pitch_roll(double yaw_rad, double pitch_rad,
+                                                  double roll_rad) {
+  return Eigen::AngleAxisd(yaw_rad, Vector3d::UnitZ()) *
+         Eigen::AngleAxisd(pitch_rad, Vector3d::UnitY()) *
+         Eigen::AngleAxisd(roll_rad, Vector3d::UnitX());
+}
 namespace {
 // Two samples further apart than this (a link outage) do not describe the motion between them.
 constexpr int64_t kMaxGapNs = 100'000'000;

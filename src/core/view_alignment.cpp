@@ -11,7 +11,8 @@ constexpr double kMaxDisagreementM = 0.02;
 constexpr double kMaxDisagreementRad = 1.0 * M_PI / 180.0;
 // Each view sees at least half of the other's points for the place to be believed; 60 % for
 // the relative pose to be measured well enough for the map: of the fr1_xyz pairs verified at
-// 50-60 %, four were 4.1-5.5 cm off the ground truth, none at 60 % and above (README).
+// 50-60 %, four were 4.1-5.5 cm off the ground truth, none at 60 % and above
+// (docs/loop-closure.md).
 constexpr double kMinVisibleSamePlace = 0.5;
 constexpr double kMinVisibleMeasured = 0.6;
 }  // namespace

@@ -48,14 +48,14 @@ constexpr int kEventWaitUs = 50'000;
 }  // namespace
 
 #define RGBDTAM_USB_CALL(call) freenect_##call,
-extern const FreenectDriver kFreenectUsb = {RGBDTAM_FREENECT_CALLS(RGBDTAM_USB_CALL)
-                                                depth_callback<kFreenectUsb>,
-                                            video_callback<kFreenectUsb>};
+extern const FreenectDriver kFreenectUsbDriver = {RGBDTAM_FREENECT_CALLS(RGBDTAM_USB_CALL)
+                                                      depth_callback<kFreenectUsbDriver>,
+                                                  video_callback<kFreenectUsbDriver>};
 #if RGBDTAM_WITH_FAKENECT
 #define RGBDTAM_FAKENECT_CALL(call) fakenect_##call,
-extern const FreenectDriver kFakenect = {RGBDTAM_FREENECT_CALLS(RGBDTAM_FAKENECT_CALL)
-                                             depth_callback<kFakenect>,
-                                         video_callback<kFakenect>};
+extern const FreenectDriver kFakenectDriver = {RGBDTAM_FREENECT_CALLS(RGBDTAM_FAKENECT_CALL)
+                                                   depth_callback<kFakenectDriver>,
+                                               video_callback<kFakenectDriver>};
 #endif
 
 uint16_t FreenectSource::raw_to_mm(uint16_t raw) {

@@ -43,7 +43,7 @@ const KeySpec kSpecs[] = {
     RGBDTAM_TEXT("build.preset", "the CMake preset that builds for it", preset, true),
     {"board.cpu_count", ValueType::kInt, 1, 256, "", "CPU cores thread placement may name",
      RGBDTAM_FIELD(cpu_count), true},
-    RGBDTAM_TEXT("sensor.kind", "replay, openni2, freenect, fakenect or v4l2", sensor_kind, true),
+    RGBDTAM_TEXT("sensor.kind", "the sensor backend (docs/sensors.md)", sensor_kind, true),
     RGBDTAM_TEXT("sensor.device",
                  "replay: TUM folder; fakenect: libfreenect dump folder; else device path or URI",
                  sensor_device, true),
@@ -176,10 +176,19 @@ bool resolve(char* path, const char* dir) {
   std::memcpy(path, joined, static_cast<size_t>(n) + 1);
   return true;
 }
+
+// replay and fakenect read a folder, written relative to the board folder.
+bool sensor_device_is_a_folder(const Board& b) {
+  const SensorKindName* kind = find_sensor_kind(b.sensor_kind);
+  return kind != nullptr && kind->device_is_a_folder;
+}
 }  // namespace
 
-bool sensor_device_is_a_folder(const Board& b) {
-  return std::strcmp(b.sensor_kind, "replay") == 0 || std::strcmp(b.sensor_kind, "fakenect") == 0;
+const SensorKindName* find_sensor_kind(const char* name) {
+  for (const SensorKindName& k : kSensorKinds) {
+    if (std::strcmp(name, k.name) == 0) return &k;
+  }
+  return nullptr;
 }
 
 Status parse_board(const char* text, const char* source, const char* board_dir, Board* out) {
@@ -195,6 +204,11 @@ Status parse_board(const char* text, const char* source, const char* board_dir, 
   }
   *out = b;
   return Status::ok();
+}
+
+void print_board(const Board& in, char* buf, int size, KeyListing listing) {
+  Board b = in;
+  print_key_values(kTable, &b, buf, size, listing);
 }
 
 Status set_board_value(const char* assignment, Board* out) {
@@ -229,13 +243,16 @@ bool split_endpoint(const char* endpoint, char* ip, int ip_size, uint16_t* port)
 }
 
 Status validate_board(const Board& b) {
-  static const char* const kSensors[] = {"replay", "openni2", "freenect", "fakenect", "v4l2"};
   static const char* const kLinks[] = {"udp", "serial"};
-  if (!one_of(b.sensor_kind, kSensors, 5)) {
+  if (find_sensor_kind(b.sensor_kind) == nullptr) {
+    char kinds[96] = "";
+    for (const SensorKindName& k : kSensorKinds) {
+      std::snprintf(kinds + std::strlen(kinds), sizeof(kinds) - std::strlen(kinds), "%s%s",
+                    kinds[0] != '\0' ? ", " : "", k.name);
+    }
     return Status::error(StatusCode::kInvalidArgument,
-                         "board '%s': sensor.kind '%s' is not replay, openni2, freenect, fakenect "
-                         "or v4l2",
-                         b.name, b.sensor_kind);
+                         "board '%s': sensor.kind '%s' is not one of %s", b.name, b.sensor_kind,
+                         kinds);
   }
   unsigned vendor = 0, product = 0;
   int used = 0;

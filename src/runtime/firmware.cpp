@@ -97,7 +97,7 @@ PoseEstimate FirmwareRuntime::on_frame(const SensorFrame& frame, int64_t arrival
   if ((pose.flags & kLost) != 0 && !lost_) {
     lost_ = true;
     // The checks the pose failed tell the operator why.
-    char reasons[160], text[mavlink::kMaxStatusTextChars + 1];
+    char reasons[160], text[kMaxStatusTextChars + 1];
     describe_health(pose.failed_checks, reasons, sizeof(reasons));
     std::snprintf(text, sizeof(text), "rgbdtam: lost: %s", reasons);
     post_event(mavlink::kMavSeverityWarning, text);
@@ -146,7 +146,7 @@ void FirmwareRuntime::on_sensor_error(const Status& error, int64_t now_ns) {
   }
   sensor_text_posted_ = true;
   sensor_text_ns_ = now_ns;
-  char text[mavlink::kMaxStatusTextChars + 1];
+  char text[kMaxStatusTextChars + 1];
   std::snprintf(text, sizeof(text), "sensor: %s", error.message());
   post_event(mavlink::kMavSeverityError, text);
 }
@@ -154,7 +154,7 @@ void FirmwareRuntime::on_sensor_error(const Status& error, int64_t now_ns) {
 void FirmwareRuntime::on_sensor_recovered(int64_t outage_ns) {
   ++counters_.sensor_recoveries;
   sensor_text_posted_ = false;  // the next outage is reported at once
-  char text[mavlink::kMaxStatusTextChars + 1];
+  char text[kMaxStatusTextChars + 1];
   std::snprintf(text, sizeof(text), "sensor: frames again after %lld ms",
                 static_cast<long long>(outage_ns / 1'000'000));
   post_event(mavlink::kMavSeverityInfo, text);
@@ -167,7 +167,7 @@ void FirmwareRuntime::report_stores_full() {
   }
   if (!place_store_full_reported_ && slam_.places().evicted() > 0) {
     place_store_full_reported_ = true;
-    char text[mavlink::kMaxStatusTextChars + 1];
+    char text[kMaxStatusTextChars + 1];
     std::snprintf(text, sizeof(text), "rgbdtam: place store full (%d), forgetting oldest",
                   slam_.places().capacity());
     post_event(mavlink::kMavSeverityInfo, text);

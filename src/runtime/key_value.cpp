@@ -181,8 +181,27 @@ Status apply_key_value(const char* assignment, const char* source, const KeyTabl
   return apply_line(line, source, table, target, nullptr);
 }
 
-void print_key_values(const KeyTable& table, void* target, char* buf, int size) {
+namespace {
+// A number's range as the file writes it; empty for the other types.
+void print_range(const KeySpec& s, char* out, size_t size) {
+  const bool number = s.type == ValueType::kReal || s.type == ValueType::kFloat ||
+                      s.type == ValueType::kInt || s.type == ValueType::kMillisecondsAsNs ||
+                      s.type == ValueType::kDegreesAsRadians;
+  if (number) {
+    std::snprintf(out, size, "%g to %g", s.min, s.max);
+  } else {
+    std::snprintf(out, size, "%s", s.type == ValueType::kBool ? "true, false" : "");
+  }
+}
+}  // namespace
+
+void print_key_values(const KeyTable& table, void* target, char* buf, int size,
+                      KeyListing listing) {
   int used = 0;
+  if (listing == KeyListing::kMarkdown) {
+    used = std::snprintf(buf, static_cast<size_t>(size),
+                         "| key | value | unit | range | meaning |\n|---|---|---|---|---|\n");
+  }
   for (int i = 0; i < table.count; ++i) {
     const KeySpec& s = table.specs[i];
     char value[kTextBytes];
@@ -216,8 +235,16 @@ void print_key_values(const KeyTable& table, void* target, char* buf, int size) 
         break;
     }
     if (used >= size) return;
-    used += std::snprintf(buf + used, static_cast<size_t>(size - used), "%s = %s  # %s%s%s\n",
-                          s.key, value, s.doc, *s.unit != '\0' ? ", " : "", s.unit);
+    if (listing == KeyListing::kMarkdown) {
+      char range[64];
+      print_range(s, range, sizeof(range));
+      used += std::snprintf(buf + used, static_cast<size_t>(size - used),
+                            "| `%s` | %s | %s | %s | %s%s |\n", s.key, value, s.unit, range, s.doc,
+                            s.required ? " (required)" : "");
+    } else {
+      used += std::snprintf(buf + used, static_cast<size_t>(size - used), "%s = %s  # %s%s%s\n",
+                            s.key, value, s.doc, *s.unit != '\0' ? ", " : "", s.unit);
+    }
   }
 }
 

@@ -83,7 +83,6 @@ struct Fields;
 
 template <>
 struct Fields<Heartbeat> {
-  static constexpr const MessageSpec& kSpec = kHeartbeat;
   template <typename M, typename F>
   static void each(M& m, F&& f) {
     f(m.custom_mode);
@@ -97,7 +96,6 @@ struct Fields<Heartbeat> {
 
 template <>
 struct Fields<StatusText> {
-  static constexpr const MessageSpec& kSpec = kStatusText;
   template <typename M, typename F>
   static void each(M& m, F&& f) {
     f(m.severity);
@@ -109,7 +107,6 @@ struct Fields<StatusText> {
 
 template <>
 struct Fields<Timesync> {
-  static constexpr const MessageSpec& kSpec = kTimesync;
   template <typename M, typename F>
   static void each(M& m, F&& f) {
     f(m.tc1);
@@ -121,7 +118,6 @@ struct Fields<Timesync> {
 
 template <>
 struct Fields<Odometry> {
-  static constexpr const MessageSpec& kSpec = kOdometry;
   template <typename M, typename F>
   static void each(M& m, F&& f) {
     f(m.time_usec);
@@ -147,7 +143,6 @@ struct Fields<Odometry> {
 
 template <>
 struct Fields<ObstacleDistance> {
-  static constexpr const MessageSpec& kSpec = kObstacleDistance;
   template <typename M, typename F>
   static void each(M& m, F&& f) {
     f(m.time_usec);
@@ -164,7 +159,6 @@ struct Fields<ObstacleDistance> {
 
 template <>
 struct Fields<Attitude> {
-  static constexpr const MessageSpec& kSpec = kAttitude;
   template <typename M, typename F>
   static void each(M& m, F&& f) {
     f(m.time_boot_ms);
@@ -179,7 +173,6 @@ struct Fields<Attitude> {
 
 template <>
 struct Fields<AttitudeQuaternion> {
-  static constexpr const MessageSpec& kSpec = kAttitudeQuaternion;
   template <typename M, typename F>
   static void each(M& m, F&& f) {
     f(m.time_boot_ms);
@@ -193,7 +186,6 @@ struct Fields<AttitudeQuaternion> {
 
 template <>
 struct Fields<SetGpsGlobalOrigin> {
-  static constexpr const MessageSpec& kSpec = kSetGpsGlobalOrigin;
   template <typename M, typename F>
   static void each(M& m, F&& f) {
     f(m.latitude);
@@ -206,7 +198,6 @@ struct Fields<SetGpsGlobalOrigin> {
 
 template <>
 struct Fields<NamedValueFloat> {
-  static constexpr const MessageSpec& kSpec = kNamedValueFloat;
   template <typename M, typename F>
   static void each(M& m, F&& f) {
     f(m.time_boot_ms);
@@ -225,7 +216,7 @@ int pack_fields(const M& m, uint8_t* payload) {
 template <typename M>
 void unpack_fields(const uint8_t* payload, int length, M* m) {
   uint8_t scratch[kMaxPayloadBytes];
-  Reader r(padded(payload, length, Fields<M>::kSpec.payload_bytes, scratch));
+  Reader r(padded(payload, length, M::kSpec.payload_bytes, scratch));
   Fields<M>::each(*m, [&](auto& v) { r.get(&v); });
 }
 }  // namespace

@@ -320,9 +320,9 @@ Status set_param(const char* assignment, const char* source, Params* out) {
   return Status::ok();
 }
 
-void print_params(const Params& in, char* buf, int size) {
+void print_params(const Params& in, char* buf, int size, KeyListing listing) {
   Params p = in;
-  print_key_values(kTable, &p, buf, size);
+  print_key_values(kTable, &p, buf, size, listing);
 }
 
 }  // namespace rgbdtam

@@ -215,7 +215,7 @@ void PoseLink::on_status(uint8_t severity, const char* text, int64_t now_ns) {
   mavlink::StatusText s;
   s.severity = severity;
   constexpr size_t kChunk = sizeof(s.text);
-  const size_t length = strnlen(text, mavlink::kMaxStatusTextChars);
+  const size_t length = strnlen(text, kMaxStatusTextChars);
   // A longer text goes in chunks sharing a non-zero id; the last one ends in a NUL (an empty
   // chunk when the text fills the one before), which tells the receiver it is complete.
   if (length > kChunk) {
@@ -237,89 +237,100 @@ void PoseLink::on_frame(const mavlink::Frame& f, int64_t now_ns) {
   ++peer_.frames;
   const bool from_peer =
       peer_.heard && f.system_id == peer_.system_id && f.component_id == peer_.component_id;
-  if (f.message_id == mavlink::kHeartbeat.id) {
-    mavlink::Heartbeat hb;
-    mavlink::unpack(f.payload, f.length, &hb);
-    // The operator learns when the autopilot appears and when it comes back.
-    const bool newly_back = peer_.heard && peer_.silent;
-    if (!peer_.heard || peer_.silent) {
-      char text[mavlink::kMaxStatusTextChars + 1];
-      std::snprintf(text, sizeof(text),
-                    "autopilot: heard, system %u component %u, MAV_AUTOPILOT %u", f.system_id,
-                    f.component_id, hb.autopilot);
-      on_status(mavlink::kMavSeverityInfo, text, now_ns);
-    }
-    peer_.heard = true;
-    peer_.silent = false;
-    peer_.system_id = f.system_id;
-    peer_.component_id = f.component_id;
-    peer_.autopilot = hb.autopilot;
-    peer_.type = hb.type;
-    peer_.last_heartbeat_ns = now_ns;
-    ++peer_.heartbeats;
-    // An autopilot heard for the first time, or again after a silence (it may have rebooted),
-    // is told where its origin is, so that modes needing one work without GPS.
-    if (config_.send_origin && (peer_.heartbeats == 1 || newly_back)) {
-      mavlink::SetGpsGlobalOrigin origin;
-      origin.latitude = config_.origin_latitude_e7;
-      origin.longitude = config_.origin_longitude_e7;
-      origin.altitude = config_.origin_altitude_mm;
-      origin.target_system = f.system_id;
-      if (send_now(origin, now_ns)) ++counters_.origins_sent;
-    }
-  } else if (f.message_id == mavlink::kAttitudeQuaternion.id && from_peer) {
-    mavlink::AttitudeQuaternion a;
-    mavlink::unpack(f.payload, f.length, &a);
-    on_attitude(a);
-  } else if (f.message_id == mavlink::kAttitude.id && from_peer) {
-    mavlink::Attitude e;
-    mavlink::unpack(f.payload, f.length, &e);
-    // Aerospace Euler angles: yaw, then pitch, then roll.
-    const Eigen::Quaterniond q = Eigen::AngleAxisd(e.yaw, Vector3d::UnitZ()) *
-                                 Eigen::AngleAxisd(e.pitch, Vector3d::UnitY()) *
-                                 Eigen::AngleAxisd(e.roll, Vector3d::UnitX());
-    mavlink::AttitudeQuaternion a;
-    a.time_boot_ms = e.time_boot_ms;
-    a.q[0] = static_cast<float>(q.w());
-    a.q[1] = static_cast<float>(q.x());
-    a.q[2] = static_cast<float>(q.y());
-    a.q[3] = static_cast<float>(q.z());
-    a.rollspeed = e.rollspeed;
-    a.pitchspeed = e.pitchspeed;
-    a.yawspeed = e.yawspeed;
-    on_attitude(a);
-  } else if (f.message_id == mavlink::kTimesync.id && time_base_set_) {
-    mavlink::Timesync t;
-    mavlink::unpack(f.payload, f.length, &t);
-    const int64_t sensor_now = now_ns + sensor_minus_now_ns_;
-    if (t.tc1 == 0) {  // a request: answered in the clock of our time_usec
-      mavlink::Timesync answer;
-      answer.tc1 = sensor_now;
-      answer.ts1 = t.ts1;
-      answer.target_system = f.system_id;
-      answer.target_component = f.component_id;
-      (void)send_now(answer, now_ns);
-      ++peer_.timesync_answered;
-    } else if (timesync_sent_ns_ >= 0 && t.ts1 == timesync_sent_ts1_) {  // our answer
-      const int64_t round_trip = now_ns - timesync_sent_ns_;
-      timesync_sent_ns_ = -1;
-      if (peer_.best_round_trip_ns < 0 || round_trip < peer_.best_round_trip_ns) {
-        peer_.best_round_trip_ns = round_trip;
-      }
-      if (round_trip > 2 * peer_.best_round_trip_ns) return;  // delayed: its offset is not
-      const int64_t offset = t.tc1 - (t.ts1 + round_trip / 2);
-      // An autopilot that rebooted restarts its clock: smoothing towards it would stamp its
-      // attitudes wrongly for tens of seconds, so a jump is taken at once.
-      const bool jumped =
-          peer_.clock_known && std::llabs(offset - peer_.clock_offset_ns) > kClockJumpNs;
-      peer_.clock_jumps += jumped ? 1 : 0;
-      peer_.clock_offset_ns = !peer_.clock_known || jumped
-                                  ? offset
-                                  : peer_.clock_offset_ns + (offset - peer_.clock_offset_ns) / 5;
-      peer_.clock_known = true;
-      ++peer_.timesync_replies;
-    }
+  switch (f.message_id) {
+    case mavlink::kHeartbeat.id:
+      on_heartbeat(f, now_ns);
+      break;
+    case mavlink::kAttitudeQuaternion.id:
+      if (from_peer) on_attitude(mavlink::unpacked<mavlink::AttitudeQuaternion>(f));
+      break;
+    case mavlink::kAttitude.id:
+      if (from_peer) on_attitude(mavlink::unpacked<mavlink::Attitude>(f));
+      break;
+    case mavlink::kTimesync.id:
+      if (time_base_set_) on_timesync(f, now_ns);
+      break;
+    default:
+      break;
   }
+}
+
+void PoseLink::on_heartbeat(const mavlink::Frame& f, int64_t now_ns) {
+  const auto hb = mavlink::unpacked<mavlink::Heartbeat>(f);
+  // The operator learns when the autopilot appears and when it comes back.
+  const bool newly_back = peer_.heard && peer_.silent;
+  if (!peer_.heard || peer_.silent) {
+    char text[kMaxStatusTextChars + 1];
+    std::snprintf(text, sizeof(text), "autopilot: heard, system %u component %u, MAV_AUTOPILOT %u",
+                  f.system_id, f.component_id, hb.autopilot);
+    on_status(mavlink::kMavSeverityInfo, text, now_ns);
+  }
+  peer_.heard = true;
+  peer_.silent = false;
+  peer_.system_id = f.system_id;
+  peer_.component_id = f.component_id;
+  peer_.autopilot = hb.autopilot;
+  peer_.type = hb.type;
+  peer_.last_heartbeat_ns = now_ns;
+  ++peer_.heartbeats;
+  // An autopilot heard for the first time, or again after a silence (it may have rebooted),
+  // is told where its origin is, so that modes needing one work without GPS.
+  if (config_.send_origin && (peer_.heartbeats == 1 || newly_back)) {
+    mavlink::SetGpsGlobalOrigin origin;
+    origin.latitude = config_.origin_latitude_e7;
+    origin.longitude = config_.origin_longitude_e7;
+    origin.altitude = config_.origin_altitude_mm;
+    origin.target_system = f.system_id;
+    if (send_now(origin, now_ns)) ++counters_.origins_sent;
+  }
+}
+
+void PoseLink::on_attitude(const mavlink::Attitude& e) {
+  const Eigen::Quaterniond q = quaternion_from_yaw_pitch_roll(e.yaw, e.pitch, e.roll);
+  mavlink::AttitudeQuaternion a;
+  a.time_boot_ms = e.time_boot_ms;
+  a.q[0] = static_cast<float>(q.w());
+  a.q[1] = static_cast<float>(q.x());
+  a.q[2] = static_cast<float>(q.y());
+  a.q[3] = static_cast<float>(q.z());
+  a.rollspeed = e.rollspeed;
+  a.pitchspeed = e.pitchspeed;
+  a.yawspeed = e.yawspeed;
+  on_attitude(a);
+}
+
+void PoseLink::on_timesync(const mavlink::Frame& f, int64_t now_ns) {
+  const auto t = mavlink::unpacked<mavlink::Timesync>(f);
+  if (t.tc1 == 0) {  // a request: answered in the clock of our time_usec
+    mavlink::Timesync answer;
+    answer.tc1 = now_ns + sensor_minus_now_ns_;
+    answer.ts1 = t.ts1;
+    answer.target_system = f.system_id;
+    answer.target_component = f.component_id;
+    (void)send_now(answer, now_ns);
+    ++peer_.timesync_answered;
+  } else if (timesync_sent_ns_ >= 0 && t.ts1 == timesync_sent_ts1_) {  // our request's answer
+    const int64_t round_trip = now_ns - timesync_sent_ns_;
+    timesync_sent_ns_ = -1;
+    on_clock_offset(t.tc1 - (t.ts1 + round_trip / 2), round_trip);
+  }
+}
+
+void PoseLink::on_clock_offset(int64_t offset_ns, int64_t round_trip_ns) {
+  if (peer_.best_round_trip_ns < 0 || round_trip_ns < peer_.best_round_trip_ns) {
+    peer_.best_round_trip_ns = round_trip_ns;
+  }
+  if (round_trip_ns > 2 * peer_.best_round_trip_ns) return;  // delayed: its offset is not
+  // An autopilot that rebooted restarts its clock: smoothing towards it would stamp its
+  // attitudes wrongly for tens of seconds, so a jump is taken at once.
+  const bool jumped =
+      peer_.clock_known && std::llabs(offset_ns - peer_.clock_offset_ns) > kClockJumpNs;
+  peer_.clock_jumps += jumped ? 1 : 0;
+  peer_.clock_offset_ns = !peer_.clock_known || jumped
+                              ? offset_ns
+                              : peer_.clock_offset_ns + (offset_ns - peer_.clock_offset_ns) / 5;
+  peer_.clock_known = true;
+  ++peer_.timesync_replies;
 }
 
 void PoseLink::on_attitude(const mavlink::AttitudeQuaternion& a) {

@@ -29,10 +29,10 @@ namespace {
 
 constexpr int kW = FreenectSource::kWidth, kH = FreenectSource::kHeight;
 #if RGBDTAM_WITH_FAKENECT
-const FreenectDriver& kPlayer = kFakenect;
+const FreenectDriver& kPlayer = kFakenectDriver;
 constexpr const char* kPlayerKind = "fakenect";
 #else
-const FreenectDriver& kPlayer = kFreenectUsb;
+const FreenectDriver& kPlayer = kFreenectUsbDriver;
 constexpr const char* kPlayerKind = "freenect";
 #endif
 

@@ -16,7 +16,7 @@ namespace {
 
 // with_loop: also with loop closure and relocalisation on. Off for the scenes where a
 // relocalisation can still land on a look-alike place one period away, a period longer than the
-// view (README, "Integrity": what is left).
+// view (docs/robust-tracking.md, "Integrity": what is left).
 void expect_never_wrong(const char* name, int frames, bool with_loop) {
   testing::RepeatedScene scene;
   ASSERT_TRUE(testing::RepeatedScene::named(name, &scene));

@@ -415,9 +415,9 @@ TEST(PoseLink, ALevelFrameTurnsOdometryAndMovesTheResetCounterOn) {
   EXPECT_EQ(link.odometry_of(p).reset_counter, after.reset_counter) << "the same frame again";
 }
 
-// The README's two mountings: a camera moved along its image's "up" is, looking down with the
-// image's top to the front, the body moving forward; looking forward, moving along its optical
-// axis is.
+// Two of docs/firmware.md's mountings: a camera moved along its image's "up" is, looking down
+// with the image's top to the front, the body moving forward; looking forward, moving along its
+// optical axis is.
 TEST(PoseLink, TheReadmesMountingsPutTheBodysForwardWhereTheySay) {
   const double h = std::sqrt(0.5);
   for (const auto& [q_b_c, camera_forward] :

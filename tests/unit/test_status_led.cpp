@@ -4,6 +4,7 @@
 #include <string>
 
 #include "rgbdtam/hal/gpio.hpp"
+#include "rgbdtam/runtime/status_led.hpp"
 
 namespace rgbdtam {
 namespace {

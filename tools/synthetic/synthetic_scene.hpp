@@ -9,7 +9,7 @@
 
 #include "rgbdtam/core/camera.hpp"
 #include "rgbdtam/core/se3.hpp"
-#include "rgbdtam/runtime/messages.hpp"
+#include "rgbdtam/port/messages.hpp"
 
 namespace rgbdtam::testing {
 

@@ -19,6 +19,11 @@ struct AttitudeSample {
   double timing_sigma_s = 0;  // how well t_ns is known (half the TIMESYNC round trip)
 };
 
+// Aerospace Euler angles (yaw, then pitch, then roll, as MAVLink's ATTITUDE sends them) as the
+// rotation from the level frame to the body.
+Eigen::Quaterniond quaternion_from_yaw_pitch_roll(double yaw_rad, double pitch_rad,
+                                                  double roll_rad);
+
 // The latest attitudes, in a fixed ring: the attitude at any time they cover, interpolated.
 class AttitudeHistory {
  public:

@@ -46,7 +46,7 @@ struct ViewAlignment {
 
 // Whether an alignment shows the same place: both directions pass the tracker's health checks,
 // they agree with each other, and each view sees at least half of the other's points. Chosen by
-// measurement on real pairs of views (README, "Verification").
+// measurement on real pairs of views (docs/loop-closure.md, "Verification").
 bool shows_same_place(const ViewAlignment& a);
 // ... and measures the relative pose well enough for an edge of the map: the views share more.
 bool measures_pose(const ViewAlignment& a);

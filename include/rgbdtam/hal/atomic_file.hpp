@@ -7,7 +7,7 @@
 #include <climits>
 #include <memory>
 
-#include "rgbdtam/runtime/map_checkpoint.hpp"
+#include "rgbdtam/port/byte_sink.hpp"
 
 namespace rgbdtam {
 

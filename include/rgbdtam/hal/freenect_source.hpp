@@ -10,13 +10,13 @@
 //
 // Built when RGBDTAM_WITH_FREENECT is on: static builds link libfreenect and libusb built from
 // Debian's sources (tools/build_kinect_libs.sh) and hold fakenect beside them
-// (RGBDTAM_WITH_FAKENECT: kFakenect plays the dump in $FAKENECT_PATH; it allocates per frame, so
-// it is for emulation and tests, never a robot); dynamic builds link Debian's libfreenect.
+// (RGBDTAM_WITH_FAKENECT: kFakenectDriver plays the dump in $FAKENECT_PATH; it allocates per frame,
+// so it is for emulation and tests, never a robot); dynamic builds link Debian's libfreenect.
 
 #include <cstdint>
 
 #include "rgbdtam/core/image.hpp"
-#include "rgbdtam/hal/sensor_source.hpp"
+#include "rgbdtam/port/sensor_source.hpp"
 
 struct _freenect_context;
 struct _freenect_device;
@@ -25,9 +25,9 @@ namespace rgbdtam {
 
 // Which libfreenect the backend calls: the USB driver, or fakenect (static builds).
 struct FreenectDriver;
-extern const FreenectDriver kFreenectUsb;
+extern const FreenectDriver kFreenectUsbDriver;
 #if RGBDTAM_WITH_FAKENECT
-extern const FreenectDriver kFakenect;
+extern const FreenectDriver kFakenectDriver;
 #endif
 
 enum class FreenectDepth { kRegistered, kRaw };

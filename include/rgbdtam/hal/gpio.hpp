@@ -5,7 +5,7 @@
 #include <cstdint>
 
 #include "rgbdtam/core/status.hpp"
-#include "rgbdtam/runtime/status_led.hpp"
+#include "rgbdtam/port/gpio_outputs.hpp"
 
 struct gpiod_chip;
 struct gpiod_line;

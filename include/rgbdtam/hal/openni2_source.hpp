@@ -15,7 +15,7 @@
 #include <memory>
 
 #include "rgbdtam/core/image.hpp"
-#include "rgbdtam/hal/sensor_source.hpp"
+#include "rgbdtam/port/sensor_source.hpp"
 
 namespace openni {
 class Device;

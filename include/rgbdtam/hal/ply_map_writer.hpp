@@ -8,7 +8,7 @@
 
 #include "rgbdtam/core/status.hpp"
 #include "rgbdtam/hal/file.hpp"
-#include "rgbdtam/runtime/mapping.hpp"
+#include "rgbdtam/port/map_sink.hpp"
 
 namespace rgbdtam {
 

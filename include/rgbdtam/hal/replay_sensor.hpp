@@ -16,7 +16,7 @@
 
 #include "rgbdtam/core/image.hpp"
 #include "rgbdtam/hal/tum_replay_source.hpp"
-#include "rgbdtam/runtime/thread_placement.hpp"
+#include "rgbdtam/port/thread_placement.hpp"
 
 namespace rgbdtam {
 

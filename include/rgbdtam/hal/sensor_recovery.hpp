@@ -7,8 +7,8 @@
 
 #include <cstdint>
 
-#include "rgbdtam/hal/sensor_source.hpp"
 #include "rgbdtam/hal/usb_devices.hpp"
+#include "rgbdtam/port/sensor_source.hpp"
 
 namespace rgbdtam {
 

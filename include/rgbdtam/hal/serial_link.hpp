@@ -6,7 +6,7 @@
 #include <cstdint>
 
 #include "rgbdtam/core/status.hpp"
-#include "rgbdtam/runtime/byte_link.hpp"
+#include "rgbdtam/port/byte_link.hpp"
 
 namespace rgbdtam {
 

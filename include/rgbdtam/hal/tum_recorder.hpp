@@ -9,11 +9,11 @@
 
 #include "rgbdtam/core/image.hpp"
 #include "rgbdtam/hal/png_encoder.hpp"
-#include "rgbdtam/runtime/latency_stats.hpp"
-#include "rgbdtam/runtime/messages.hpp"
-#include "rgbdtam/runtime/spsc_ring.hpp"
-#include "rgbdtam/runtime/thread_placement.hpp"
-#include "rgbdtam/runtime/worker.hpp"
+#include "rgbdtam/port/latency_stats.hpp"
+#include "rgbdtam/port/messages.hpp"
+#include "rgbdtam/port/spsc_ring.hpp"
+#include "rgbdtam/port/thread_placement.hpp"
+#include "rgbdtam/port/worker.hpp"
 
 namespace rgbdtam {
 

@@ -8,7 +8,7 @@
 
 #include "rgbdtam/core/image.hpp"
 #include "rgbdtam/hal/png_decoder.hpp"
-#include "rgbdtam/hal/sensor_source.hpp"
+#include "rgbdtam/port/sensor_source.hpp"
 
 namespace rgbdtam {
 

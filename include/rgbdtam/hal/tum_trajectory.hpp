@@ -7,7 +7,7 @@
 #include "rgbdtam/core/evaluation.hpp"
 #include "rgbdtam/core/status.hpp"
 #include "rgbdtam/hal/file.hpp"
-#include "rgbdtam/runtime/messages.hpp"
+#include "rgbdtam/port/messages.hpp"
 
 namespace rgbdtam {
 

@@ -11,7 +11,7 @@
 
 #include "rgbdtam/core/image.hpp"
 #include "rgbdtam/hal/jpeg_decoder.hpp"
-#include "rgbdtam/hal/sensor_source.hpp"
+#include "rgbdtam/port/sensor_source.hpp"
 
 namespace rgbdtam {
 

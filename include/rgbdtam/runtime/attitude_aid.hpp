@@ -7,7 +7,7 @@
 #include <cstdint>
 
 #include "rgbdtam/core/attitude.hpp"
-#include "rgbdtam/runtime/messages.hpp"
+#include "rgbdtam/port/messages.hpp"
 
 namespace rgbdtam {
 

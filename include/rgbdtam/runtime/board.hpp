@@ -8,11 +8,27 @@
 
 #include "rgbdtam/core/se3.hpp"
 #include "rgbdtam/core/status.hpp"
+#include "rgbdtam/port/thread_placement.hpp"
 #include "rgbdtam/runtime/key_value.hpp"
 #include "rgbdtam/runtime/params.hpp"
-#include "rgbdtam/runtime/thread_placement.hpp"
 
 namespace rgbdtam {
+
+// The sensor backends a board may name in sensor.kind, all of them here. A build has those
+// CMakeLists.txt enables (rgbdtam_backend; `rgbdtam check` names them).
+enum class SensorKind : uint8_t { kReplay, kV4l2, kFreenect, kFakenect, kOpenni2 };
+struct SensorKindName {
+  SensorKind kind;
+  const char* name;
+  bool device_is_a_folder;  // sensor.device names a folder, relative to the board folder
+};
+constexpr SensorKindName kSensorKinds[] = {
+    {SensorKind::kReplay, "replay", true},      {SensorKind::kV4l2, "v4l2", false},
+    {SensorKind::kFreenect, "freenect", false}, {SensorKind::kFakenect, "fakenect", true},
+    {SensorKind::kOpenni2, "openni2", false},
+};
+// The kind sensor.kind names; null when it names none.
+const SensorKindName* find_sensor_kind(const char* name);
 
 struct Board {
   char name[kTextBytes] = "";
@@ -22,7 +38,7 @@ struct Board {
   int cpu_count = 1;             // cores the thread placement may name
   int memory_budget_mb = 0;      // what init may allocate; 0: half of the machine's memory
 
-  char sensor_kind[kTextBytes] = "";             // replay | openni2 | freenect | fakenect | v4l2
+  char sensor_kind[kTextBytes] = "";             // one of kSensorKinds
   char sensor_device[kTextBytes] = "";           // replay: a TUM folder; else a device path or URI
   char sensor_config[kTextBytes] = "";           // the camera/tracking params file (config/)
   char sensor_colour[kTextBytes] = "yuyv";       // v4l2: yuyv or mjpeg (the colour node's format)
@@ -76,12 +92,12 @@ struct Board {
 
 // Parses a board file's text (source names it in errors) and resolves its relative paths
 // against board_dir (the folder the file is in).
-// replay and fakenect read a folder, written relative to the board folder.
-bool sensor_device_is_a_folder(const Board& b);
 Status parse_board(const char* text, const char* source, const char* board_dir, Board* out);
 // One `key=value` override, e.g. from the command line; a relative path is relative to the
 // board folder, as in the board file.
 Status set_board_value(const char* assignment, Board* out);
+// Every board key with the board's value, unit and meaning (as print_params does for params).
+void print_board(const Board& b, char* buf, int size, KeyListing listing = KeyListing::kFile);
 // Consistency checks beyond each key's own range (names the board and the key).
 Status validate_board(const Board& b);
 // The capacity overrides applied on a params struct.

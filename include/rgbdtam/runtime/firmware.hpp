@@ -12,9 +12,9 @@
 #include <cstdint>
 
 #include "rgbdtam/core/obstacle_sectors.hpp"
+#include "rgbdtam/port/latency_stats.hpp"
 #include "rgbdtam/runtime/attitude_aid.hpp"
 #include "rgbdtam/runtime/board.hpp"
-#include "rgbdtam/runtime/latency_stats.hpp"
 #include "rgbdtam/runtime/link_task.hpp"
 #include "rgbdtam/runtime/slam_system.hpp"
 #include "rgbdtam/runtime/status_led.hpp"

@@ -47,7 +47,12 @@ Status parse_key_values(const char* text, const char* source, const KeyTable& ta
 // Applies one `key=value` assignment (e.g. a command-line override).
 Status apply_key_value(const char* assignment, const char* source, const KeyTable& table,
                        void* target);
+// How print_key_values lists the keys: as lines a file of this schema takes back
+// (`key = value  # meaning, unit`), or as the rows of a Markdown table (key, value, unit, range,
+// meaning) under its header, for the generated docs/configuration.md.
+enum class KeyListing { kFile, kMarkdown };
 // Writes every key with its current value, unit and meaning, one per line.
-void print_key_values(const KeyTable& table, void* target, char* buf, int size);
+void print_key_values(const KeyTable& table, void* target, char* buf, int size,
+                      KeyListing listing = KeyListing::kFile);
 
 }  // namespace rgbdtam

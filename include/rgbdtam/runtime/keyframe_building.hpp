@@ -13,19 +13,13 @@
 
 #include "rgbdtam/core/keyframe_aliases.hpp"
 #include "rgbdtam/core/tracker.hpp"
-#include "rgbdtam/runtime/latency_stats.hpp"
+#include "rgbdtam/port/latency_stats.hpp"
+#include "rgbdtam/port/messages.hpp"
+#include "rgbdtam/port/spsc_ring.hpp"
+#include "rgbdtam/port/worker.hpp"
 #include "rgbdtam/runtime/params.hpp"
-#include "rgbdtam/runtime/spsc_ring.hpp"
-#include "rgbdtam/runtime/worker.hpp"
 
 namespace rgbdtam {
-
-struct KeyframeOrder {
-  uint32_t id = 0;
-  int64_t timestamp_ns = 0;
-  SE3 T_w_k;
-  bool with_local_maps = false;  // the local maps fill the pixels the sensor did not measure
-};
 
 // A keyframe map the tracker adopted (the authors' "local maps"), in the world.
 struct LocalMap {

@@ -14,7 +14,7 @@
 #include <memory>
 
 #include "rgbdtam/core/tracker.hpp"
-#include "rgbdtam/runtime/messages.hpp"
+#include "rgbdtam/port/messages.hpp"
 
 namespace rgbdtam {
 

@@ -5,11 +5,11 @@
 
 #include <atomic>
 
-#include "rgbdtam/runtime/latency_stats.hpp"
+#include "rgbdtam/port/latency_stats.hpp"
+#include "rgbdtam/port/spsc_ring.hpp"
+#include "rgbdtam/port/thread_placement.hpp"
+#include "rgbdtam/port/worker.hpp"
 #include "rgbdtam/runtime/pose_link.hpp"
-#include "rgbdtam/runtime/spsc_ring.hpp"
-#include "rgbdtam/runtime/thread_placement.hpp"
-#include "rgbdtam/runtime/worker.hpp"
 
 namespace rgbdtam {
 

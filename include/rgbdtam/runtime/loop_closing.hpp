@@ -17,11 +17,11 @@
 // init() nothing allocates.
 
 #include "rgbdtam/core/pose_graph.hpp"
-#include "rgbdtam/runtime/latency_stats.hpp"
+#include "rgbdtam/port/latency_stats.hpp"
+#include "rgbdtam/port/messages.hpp"
+#include "rgbdtam/port/spsc_ring.hpp"
 #include "rgbdtam/runtime/mapping.hpp"
-#include "rgbdtam/runtime/messages.hpp"
 #include "rgbdtam/runtime/place_recognition.hpp"
-#include "rgbdtam/runtime/spsc_ring.hpp"
 
 namespace rgbdtam {
 

@@ -13,14 +13,6 @@
 
 namespace rgbdtam {
 
-// Where a save goes: a new file beside the map, then synced and renamed over it; commit()
-// refuses (and names the error) when a write since begin() failed.
-class MapFileTarget : public ByteSink {
- public:
-  virtual Status begin() = 0;
-  virtual Status commit() = 0;
-};
-
 class MapCheckpoint {
  public:
   // meta: camera, vocabulary and writer; wall_clock: Unix time for the file's header; clock:

@@ -24,15 +24,10 @@
 #include <cstdint>
 
 #include "rgbdtam/core/status.hpp"
+#include "rgbdtam/port/byte_sink.hpp"
 #include "rgbdtam/runtime/loop_closing.hpp"
 
 namespace rgbdtam {
-
-class ByteSink {
- public:
-  virtual ~ByteSink() = default;
-  virtual bool write(const void* data, size_t size) = 0;
-};
 
 struct MapFileInfo {
   static constexpr uint32_t kVersion = 1;

@@ -17,12 +17,13 @@
 
 #include "rgbdtam/core/multiview.hpp"
 #include "rgbdtam/core/tracker.hpp"
+#include "rgbdtam/port/latency_stats.hpp"
+#include "rgbdtam/port/map_sink.hpp"
+#include "rgbdtam/port/spsc_ring.hpp"
+#include "rgbdtam/port/thread_placement.hpp"
+#include "rgbdtam/port/worker.hpp"
 #include "rgbdtam/runtime/keyframe_pool.hpp"
-#include "rgbdtam/runtime/latency_stats.hpp"
 #include "rgbdtam/runtime/params.hpp"
-#include "rgbdtam/runtime/spsc_ring.hpp"
-#include "rgbdtam/runtime/thread_placement.hpp"
-#include "rgbdtam/runtime/worker.hpp"
 
 namespace rgbdtam {
 
@@ -30,14 +31,6 @@ namespace rgbdtam {
 class MapperQueue : public SpscRing<MapperFrame> {
  public:
   void allocate(int slots, int width, int height);
-};
-
-// Receives each finished keyframe map, e.g. to export it. Called on the mapper's thread.
-class MapSink {
- public:
-  virtual ~MapSink() = default;
-  virtual void on_keyframe_map(int64_t timestamp_ns, const SE3& T_w_k, const PinholeIntrinsics& k,
-                               const FixedVector<FusedPixel>& pixels) = 0;
 };
 
 struct MappingCounters {

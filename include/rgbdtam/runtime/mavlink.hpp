@@ -11,6 +11,8 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "rgbdtam/port/status_text.hpp"
+
 namespace rgbdtam::mavlink {
 
 constexpr uint8_t kMagicV2 = 0xFD;
@@ -25,8 +27,8 @@ constexpr uint16_t kCrcInit = 0xFFFF;
 uint16_t crc_accumulate(uint8_t byte, uint16_t crc);
 uint16_t crc_accumulate(const uint8_t* bytes, size_t n, uint16_t crc);
 
-// Message ids, wire payload lengths (with extensions) and CRC_EXTRA. A test recomputes every
-// CRC_EXTRA from the XML definitions.
+// Message ids, wire payload lengths (with extensions) and CRC_EXTRA; each message struct below
+// names its own as kSpec. A test recomputes every CRC_EXTRA from the XML definitions.
 struct MessageSpec {
   uint32_t id;
   uint8_t payload_bytes;
@@ -62,6 +64,7 @@ enum : uint8_t {
 };
 
 struct Heartbeat {
+  static constexpr const MessageSpec& kSpec = kHeartbeat;
   uint32_t custom_mode = 0;
   uint8_t type = kMavTypeOnboardController;
   uint8_t autopilot = kMavAutopilotInvalid;
@@ -70,11 +73,8 @@ struct Heartbeat {
   uint8_t mavlink_version = 3;
 };
 
-// The longest status text sent: a prefix and a whole error message (Status holds 255), in
-// 50-character STATUSTEXT chunks that MAVLink 2 joins by `id` and `chunk_seq`.
-constexpr int kMaxStatusTextChars = 300;
-
 struct StatusText {
+  static constexpr const MessageSpec& kSpec = kStatusText;
   uint8_t severity = kMavSeverityInfo;
   char text[50] = {};  // not NUL-terminated when all 50 are used
   uint16_t id = 0;
@@ -84,6 +84,7 @@ struct StatusText {
 // A request has tc1 = 0 and ts1 = the sender's time; the answer has tc1 = the answerer's time
 // and the request's ts1. Times in ns.
 struct Timesync {
+  static constexpr const MessageSpec& kSpec = kTimesync;
   int64_t tc1 = 0;
   int64_t ts1 = 0;
   uint8_t target_system = 0;
@@ -91,6 +92,7 @@ struct Timesync {
 };
 
 struct Odometry {
+  static constexpr const MessageSpec& kSpec = kOdometry;
   uint64_t time_usec = 0;
   float x = 0, y = 0, z = 0;                          // m, in frame_id
   float q[4] = {1, 0, 0, 0};                          // w, x, y, z: frame_id to child_frame_id
@@ -107,6 +109,7 @@ struct Odometry {
 
 // Obstacles around the body, in sectors clockwise from angle_offset (deg from forward).
 struct ObstacleDistance {
+  static constexpr const MessageSpec& kSpec = kObstacleDistance;
   uint64_t time_usec = 0;
   uint16_t distances[72] = {};                  // cm; max_distance + 1: none; UINT16_MAX: unknown
   uint16_t min_distance = 0, max_distance = 0;  // cm
@@ -120,6 +123,7 @@ struct ObstacleDistance {
 // The autopilot's attitude: body (front-right-down) in its local level frame (north-east-down),
 // stamped in its boot clock. ATTITUDE says the same in Euler angles.
 struct AttitudeQuaternion {
+  static constexpr const MessageSpec& kSpec = kAttitudeQuaternion;
   uint32_t time_boot_ms = 0;
   float q[4] = {1, 0, 0, 0};                          // w, x, y, z (q1..q4 on the wire)
   float rollspeed = 0, pitchspeed = 0, yawspeed = 0;  // rad/s, body axes
@@ -127,6 +131,7 @@ struct AttitudeQuaternion {
 };
 
 struct Attitude {
+  static constexpr const MessageSpec& kSpec = kAttitude;
   uint32_t time_boot_ms = 0;
   float roll = 0, pitch = 0, yaw = 0;                 // rad
   float rollspeed = 0, pitchspeed = 0, yawspeed = 0;  // rad/s
@@ -134,6 +139,7 @@ struct Attitude {
 
 // Where the autopilot's local origin is on Earth, for flying without GPS.
 struct SetGpsGlobalOrigin {
+  static constexpr const MessageSpec& kSpec = kSetGpsGlobalOrigin;
   int32_t latitude = 0, longitude = 0;  // degE7
   int32_t altitude = 0;                 // mm above mean sea level
   uint8_t target_system = 0;
@@ -142,6 +148,7 @@ struct SetGpsGlobalOrigin {
 
 // A named value a ground station plots (the link's latency, once a second).
 struct NamedValueFloat {
+  static constexpr const MessageSpec& kSpec = kNamedValueFloat;
   uint32_t time_boot_ms = 0;
   float value = 0;
   char name[10] = {};  // not NUL-terminated when all 10 are used
@@ -190,20 +197,11 @@ class Encoder {
   int encode(const Message& m, uint8_t* out) {
     uint8_t payload[kMaxPayloadBytes];
     const int n = pack(m, payload);
-    return frame(spec_of(m), payload, n, out);
+    return frame(Message::kSpec, payload, n, out);
   }
   int frame(const MessageSpec& spec, const uint8_t* payload, int length, uint8_t* out);
 
  private:
-  static const MessageSpec& spec_of(const Heartbeat&) { return kHeartbeat; }
-  static const MessageSpec& spec_of(const StatusText&) { return kStatusText; }
-  static const MessageSpec& spec_of(const Odometry&) { return kOdometry; }
-  static const MessageSpec& spec_of(const Timesync&) { return kTimesync; }
-  static const MessageSpec& spec_of(const ObstacleDistance&) { return kObstacleDistance; }
-  static const MessageSpec& spec_of(const Attitude&) { return kAttitude; }
-  static const MessageSpec& spec_of(const AttitudeQuaternion&) { return kAttitudeQuaternion; }
-  static const MessageSpec& spec_of(const SetGpsGlobalOrigin&) { return kSetGpsGlobalOrigin; }
-  static const MessageSpec& spec_of(const NamedValueFloat&) { return kNamedValueFloat; }
   uint8_t system_id_, component_id_;
   uint8_t sequence_ = 0;
 };
@@ -217,6 +215,14 @@ struct Frame {
   uint8_t length = 0;  // as received
   uint8_t payload[kMaxPayloadBytes] = {};
 };
+
+// The message a received frame of M's id holds.
+template <typename M>
+M unpacked(const Frame& f) {
+  M m;
+  unpack(f.payload, f.length, &m);
+  return m;
+}
 
 struct DecoderCounters {
   uint64_t frames = 0;            // good frames of known messages

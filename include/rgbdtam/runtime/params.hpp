@@ -11,6 +11,7 @@
 #include "rgbdtam/core/status.hpp"
 #include "rgbdtam/core/tracker.hpp"
 #include "rgbdtam/core/tracking_health.hpp"
+#include "rgbdtam/runtime/key_value.hpp"
 
 namespace rgbdtam {
 
@@ -74,7 +75,7 @@ struct Params {
   // The reported pose covariance is this times the inverse of the Gauss-Newton information,
   // which counts every residual as independent evidence; neighbouring pixels are not, and the
   // keyframe's depth errors are shared by all frames. Calibrated so that the frame-to-frame
-  // NEES averages about 6 (README, "Reported covariance").
+  // NEES averages about 6 (docs/robust-tracking.md, "Reported covariance").
   double covariance_scale = 5000.0;
   int keyframe_pool_size = 32;
   int reuse_candidates = 2;  // nearest earlier keyframes tried before creating a new one
@@ -114,6 +115,6 @@ Status parse_params(const char* text, const char* source, Params* out);
 // Applies one `key=value` override, e.g. from the command line.
 Status set_param(const char* assignment, const char* source, Params* out);
 // Writes every key with its current value, unit and meaning.
-void print_params(const Params& p, char* buf, int size);
+void print_params(const Params& p, char* buf, int size, KeyListing listing = KeyListing::kFile);
 
 }  // namespace rgbdtam

@@ -15,7 +15,7 @@
 
 #include "rgbdtam/core/place_database.hpp"
 #include "rgbdtam/core/rigid_alignment.hpp"
-#include "rgbdtam/runtime/messages.hpp"
+#include "rgbdtam/port/messages.hpp"
 #include "rgbdtam/runtime/params.hpp"
 
 namespace rgbdtam {

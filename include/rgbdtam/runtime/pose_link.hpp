@@ -16,10 +16,10 @@
 
 #include "rgbdtam/core/attitude.hpp"
 #include "rgbdtam/core/se3.hpp"
-#include "rgbdtam/runtime/byte_link.hpp"
+#include "rgbdtam/port/byte_link.hpp"
+#include "rgbdtam/port/messages.hpp"
+#include "rgbdtam/port/spsc_ring.hpp"
 #include "rgbdtam/runtime/mavlink.hpp"
-#include "rgbdtam/runtime/messages.hpp"
-#include "rgbdtam/runtime/spsc_ring.hpp"
 
 namespace rgbdtam {
 
@@ -121,6 +121,10 @@ class PoseLink {
   bool stamp_usec(int64_t sensor_ns, uint64_t* usec) const;
   SE3 T_l_w() const;  // the ODOMETRY frame from the world
   void on_attitude(const mavlink::AttitudeQuaternion& a);
+  void on_attitude(const mavlink::Attitude& e);
+  void on_heartbeat(const mavlink::Frame& f, int64_t now_ns);
+  void on_timesync(const mavlink::Frame& f, int64_t now_ns);
+  void on_clock_offset(int64_t offset_ns, int64_t round_trip_ns);
   void listen(int64_t now_ns);
   void on_frame(const mavlink::Frame& f, int64_t now_ns);
   // A message that must go out (status, heartbeat, TIMESYNC): spent past the rate policy.

@@ -4,10 +4,10 @@
 // on threads of their own.
 // init() allocates everything, start() starts the mapper thread; process() never allocates.
 
+#include "rgbdtam/port/thread_placement.hpp"
 #include "rgbdtam/runtime/map_checkpoint.hpp"
 #include "rgbdtam/runtime/map_file.hpp"
 #include "rgbdtam/runtime/mapping.hpp"
-#include "rgbdtam/runtime/thread_placement.hpp"
 #include "rgbdtam/runtime/tracking_pipeline.hpp"
 
 namespace rgbdtam {

@@ -1,18 +1,12 @@
 #pragma once
-// GPIO outputs of the runtime, behind a seam: the status LED's blink pattern and the frame
-// trigger pulse. The hardware side (libgpiod, or a fake chip for host emulation and tests)
-// implements GpioOutputs in src/hal.
+// The status LED's blink pattern and the frame trigger pulse, written through GpioOutputs
+// (port/gpio_outputs.hpp), which hal implements.
 
 #include <cstdint>
 
-namespace rgbdtam {
+#include "rgbdtam/port/gpio_outputs.hpp"
 
-class GpioOutputs {
- public:
-  virtual ~GpioOutputs() = default;
-  // Sets one requested output line; only the line numbers given at open are used.
-  virtual void set(int line, bool on) = 0;
-};
+namespace rgbdtam {
 
 // What the LED shows, most severe first.
 enum class LedState : uint8_t {

@@ -12,11 +12,11 @@
 // Thread: the caller's (replay: main thread; runtime: the tracking task).
 
 #include "rgbdtam/core/attitude.hpp"
+#include "rgbdtam/port/messages.hpp"
 #include "rgbdtam/runtime/keyframe_building.hpp"
 #include "rgbdtam/runtime/keyframe_pool.hpp"
 #include "rgbdtam/runtime/loop_closing.hpp"
 #include "rgbdtam/runtime/mapping.hpp"
-#include "rgbdtam/runtime/messages.hpp"
 #include "rgbdtam/runtime/params.hpp"
 #include "rgbdtam/runtime/tracking/frame_buffers.hpp"
 #include "rgbdtam/runtime/tracking/keyframe_handover.hpp"

@@ -1,6 +1,6 @@
 #include "rgbdtam/runtime/tracking/motion_state.hpp"
 
-#include "rgbdtam/runtime/messages.hpp"
+#include "rgbdtam/port/messages.hpp"
 #include "rgbdtam/runtime/params.hpp"
 
 namespace rgbdtam {

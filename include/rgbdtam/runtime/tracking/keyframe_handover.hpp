@@ -7,10 +7,10 @@
 
 #include <cstdint>
 
+#include "rgbdtam/port/messages.hpp"
 #include "rgbdtam/runtime/keyframe_building.hpp"
 #include "rgbdtam/runtime/keyframe_pool.hpp"
 #include "rgbdtam/runtime/mapping.hpp"
-#include "rgbdtam/runtime/messages.hpp"
 #include "rgbdtam/runtime/params.hpp"
 #include "rgbdtam/runtime/tracking/frame_buffers.hpp"
 

@@ -3,8 +3,8 @@
 // reach the tracking pipeline along the same path.
 
 #include "rgbdtam/core/status.hpp"
-#include "rgbdtam/runtime/messages.hpp"
-#include "rgbdtam/runtime/thread_placement.hpp"
+#include "rgbdtam/port/messages.hpp"
+#include "rgbdtam/port/thread_placement.hpp"
 
 namespace rgbdtam {
 

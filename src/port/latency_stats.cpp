@@ -1,7 +1,8 @@
-#include "rgbdtam/runtime/latency_stats.hpp"
+#include "rgbdtam/port/latency_stats.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 namespace rgbdtam {
 
@@ -26,6 +27,12 @@ double LatencyStats::percentile_ms(double p) const {
     if (seen >= rank) return (static_cast<double>(i) + 0.5) * kBinNs * 1e-6;
   }
   return max_ms();
+}
+
+const char* LatencyStats::describe(int decimals, char* out, size_t size) const {
+  std::snprintf(out, size, "median %.*f, p95 %.*f, max %.*f", decimals, percentile_ms(0.5),
+                decimals, percentile_ms(0.95), decimals, max_ms());
+  return out;
 }
 
 }  // namespace rgbdtam

@@ -1,4 +1,4 @@
-#include "rgbdtam/runtime/thread_placement.hpp"
+#include "rgbdtam/port/thread_placement.hpp"
 
 #include <pthread.h>
 #include <sched.h>

@@ -7,12 +7,13 @@
 
 #include <Eigen/LU>
 
+#include "rgbdtam/core/attitude.hpp"
 #include "rgbdtam/core/fixed_vector.hpp"
 #include "rgbdtam/core/image.hpp"
 #include "rgbdtam/core/obstacle_sectors.hpp"
 #include "rgbdtam/core/se3.hpp"
 #include "rgbdtam/core/view_alignment.hpp"
-#include "rgbdtam/runtime/mavlink.hpp"
+#include "rgbdtam/port/status_text.hpp"
 
 namespace rgbdtam {
 
@@ -132,6 +133,17 @@ struct MapperFrame {
   ImageU8 edges;                // level 0 Canny edges; filled for keyframes only
 };
 
+// Tracker -> keyframe builder: build the keyframe of the frame in hand.
+struct KeyframeOrder {
+  uint32_t id = 0;
+  int64_t timestamp_ns = 0;
+  SE3 T_w_k;
+  bool with_local_maps = false;  // the local maps fill the pixels the sensor did not measure
+};
+
+// Autopilot (through the link) -> tracker's attitude prior: AttitudeSample, declared in
+// core/attitude.hpp because core's AttitudeHistory stores it.
+
 // Tracker (and firmware events) -> link task.
 struct LinkMessage {
   enum class Kind : uint8_t { kPose, kStatus, kObstacles };
@@ -143,7 +155,7 @@ struct LinkMessage {
   ObstacleSectors obstacles;
   int64_t obstacles_timestamp_ns = 0;  // their depth frame's, in the sensor's clock
   uint8_t severity = 0;
-  char text[mavlink::kMaxStatusTextChars + 1] = {};  // sent in 50-character STATUSTEXT chunks
+  char text[kMaxStatusTextChars + 1] = {};  // sent in 50-character STATUSTEXT chunks
 };
 
 }  // namespace rgbdtam

@@ -1,6 +1,7 @@
 #pragma once
 // Per-task time statistics without storing samples: a fixed histogram with 10 us bins.
 
+#include <cstddef>
 #include <cstdint>
 
 namespace rgbdtam {
@@ -16,6 +17,8 @@ class LatencyStats {
   double percentile_ms(double p) const;  // p in [0, 1]
   double max_ms() const { return static_cast<double>(max_ns_) * 1e-6; }
   double mean_ms() const { return count_ > 0 ? static_cast<double>(sum_ns_) * 1e-6 / count_ : 0.0; }
+  // "median M, p95 P, max X" in ms with the given decimals, as summaries print it; returns out.
+  const char* describe(int decimals, char* out, size_t size) const;
 
  private:
   uint32_t bins_[kBins];

@@ -13,8 +13,8 @@
 #include <mutex>
 #include <thread>
 
-#include "rgbdtam/runtime/spsc_ring.hpp"
-#include "rgbdtam/runtime/thread_placement.hpp"
+#include "rgbdtam/port/spsc_ring.hpp"
+#include "rgbdtam/port/thread_placement.hpp"
 
 namespace rgbdtam {
 
