@@ -7,6 +7,7 @@
 #include <string>
 
 #include "json_line.hpp"
+#include "output_guard.hpp"
 #include "rgbdtam/hal/tum_trajectory.hpp"
 #include "trajectory_plot.hpp"
 
@@ -159,6 +160,15 @@ int evaluate_command(int argc, char** argv) {
     std::fprintf(stderr,
                  "usage: rgbdtam eval <groundtruth.txt> <estimate.txt> [--json] "
                  "[--frames rgb.txt] [--plot out.svg] [--covariance estimate.cov]\n");
+    return 2;
+  }
+  auto given = [](const char* path) { return std::string(path != nullptr ? path : ""); };
+  if (!outputs_are_safe("rgbdtam eval", {{"--plot", given(plot_path)}},
+                        {{"the ground truth", gt_path},
+                         {"the estimate", est_path},
+                         {"--frames", given(frames_path)},
+                         {"--covariance", given(covariance_path)}},
+                        {})) {
     return 2;
   }
   std::vector<StampedPose> gt, est;

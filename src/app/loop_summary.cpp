@@ -23,4 +23,13 @@ void print_loop_summary(const SlamSystem& system) {
       system.loop().search_time().percentile_ms(0.95), system.loop().optimise_time().max_ms());
 }
 
+void warn_about_depth(const TrackingCounters& c, const char* program) {
+  if (c.depth_frozen == 0 && c.without_depth * 2 <= c.frames) return;
+  std::fprintf(stderr,
+               "%s: warning: %u of %u frames had no usable depth (%u repeated the last depth "
+               "frame, %u were not a surface; the others had none delivered or none within "
+               "depth.min..depth.max): check the sensor, its depth units and depth.factor\n",
+               program, c.without_depth, c.frames, c.depth_frozen, c.depth_not_surface);
+}
+
 }  // namespace rgbdtam

@@ -1,5 +1,5 @@
 #pragma once
-// The summary's loop line, shared by replay and run.
+// Summary lines shared by replay and run.
 
 #include "rgbdtam/runtime/slam_system.hpp"
 
@@ -8,5 +8,9 @@ namespace rgbdtam {
 // Places remembered and forgotten, edges, corrections, relocalisations and the loop module's
 // times; nothing when loop closure is off.
 void print_loop_summary(const SlamSystem& system);
+
+// On stderr, when most frames had no usable depth or the depth stream repeated itself: tracking
+// could not have been right, and the user should hear why.
+void warn_about_depth(const TrackingCounters& c, const char* program);
 
 }  // namespace rgbdtam

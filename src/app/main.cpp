@@ -11,11 +11,13 @@
 #include <cstring>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "build_id.h"
 #include "config_files.hpp"
 #include "evaluate_command.hpp"
 #include "map_command.hpp"
+#include "output_guard.hpp"
 #include "record_job.hpp"
 #include "replay_job.hpp"
 #include "rgbdtam/hal/file.hpp"
@@ -153,80 +155,10 @@ int params_command(int argc, char** argv) {
   return 0;
 }
 
-std::string folder_of(const std::string& path) {
-  const size_t slash = path.find_last_of('/');
-  return slash == std::string::npos ? "." : path.substr(0, std::max<size_t>(slash, 1));
-}
-
-// Where an output will be: its folder resolved (links, "..") and its name; empty when the
-// folder does not exist (the open will say so).
-std::string resolved_output(const std::string& path) {
-  char real[PATH_MAX];
-  if (::realpath(folder_of(path).c_str(), real) == nullptr) return "";
-  return std::string(real) + "/" + path.substr(path.find_last_of('/') + 1);
-}
-
-bool same_file(const std::string& a, const struct stat& b) {
-  struct stat st;
-  return ::stat(a.c_str(), &st) == 0 && st.st_dev == b.st_dev && st.st_ino == b.st_ino;
-}
-
-struct NamedOutput {
-  const char* option;
-  const char* path;
-};
-
-// True (after saying so) when writing an output would replace a file the run reads (the config,
-// the vocabulary it names, the sequence's lists or images) or another output of the run.
-// A saved map may replace the map it started from (load, extend, save), which is read whole at
-// init and replaced only by a complete new file.
-bool outputs_clash(const NamedOutput* outputs, int count, const Params& params, const char* config,
-                   const std::string& sequence, const char* map_in) {
-  const std::string map_in_path = map_in != nullptr ? map_in : "";
-  const std::string inputs[] = {config,
-                                params.loop.enabled ? params.loop.vocabulary : "",
-                                sequence + "/rgb.txt",
-                                sequence + "/depth.txt",
-                                sequence + "/groundtruth.txt",
-                                map_in_path};
-  for (int i = 0; i < count; ++i) {
-    const NamedOutput& o = outputs[i];
-    if (o.path == nullptr) continue;
-    const std::string resolved = resolved_output(o.path);
-    for (int j = 0; j < i; ++j) {
-      if (outputs[j].path != nullptr && !resolved.empty() &&
-          resolved == resolved_output(outputs[j].path)) {
-        std::fprintf(stderr, "rgbdtam replay: %s and %s name one file (%s): give each its own\n",
-                     outputs[j].option, o.option, o.path);
-        return true;
-      }
-    }
-    struct stat out;
-    if (::stat(o.path, &out) != 0) continue;  // a new file replaces nothing
-    for (const std::string& input : inputs) {
-      if (&input == &map_in_path && std::strcmp(o.option, "--map-out") == 0) continue;
-      if (!input.empty() && same_file(input, out)) {
-        std::fprintf(stderr, "rgbdtam replay: %s %s is an input of this run (%s)\n", o.option,
-                     o.path, input.c_str());
-        return true;
-      }
-    }
-    struct stat dir;
-    if (::stat(folder_of(o.path).c_str(), &dir) != 0) continue;
-    for (const char* images : {"/rgb", "/depth"}) {
-      if (same_file(sequence + images, dir)) {
-        std::fprintf(stderr, "rgbdtam replay: %s %s would replace one of the sequence's images\n",
-                     o.option, o.path);
-        return true;
-      }
-    }
-  }
-  return false;
-}
-
 // Ctrl-C, a kill and a dropped SSH session alike end a job after the current frame, with every
 // output complete; one that comes during init ends the job as soon as it starts. Each job's
-// request_stop is an atomic store: signal-safe.
+// request_stop is an atomic store: signal-safe. A job so ended exits 130 (as a shell reports
+// Ctrl-C), whichever the signal, so that a script can tell it from a finished one.
 volatile std::sig_atomic_t g_stop_requested = 0;
 ReplayJob* g_replaying = nullptr;
 RunJob* g_running = nullptr;
@@ -237,6 +169,8 @@ void on_stop_signal(int) {
   if (g_running != nullptr) g_running->request_stop();
   if (g_recording != nullptr) g_recording->request_stop();
 }
+
+constexpr int kInterruptedExitCode = 130;
 
 // Makes `job` the one a signal stops, and stops it at once if a signal came before.
 template <typename Job>
@@ -292,13 +226,21 @@ int replay_command(int argc, char** argv) {
     std::fprintf(stderr, "rgbdtam replay: %s\n", s.message());
     return 1;
   }
-  const NamedOutput outputs[] = {{"--trajectory", options.trajectory_path},
-                                 {"--final-trajectory", options.final_trajectory_path},
-                                 {"--covariance", options.covariance_path},
-                                 {"--map", map_path},
-                                 {"--map-out", options.map_out_path},
-                                 {"--trace", options.trace_path}};
-  if (outputs_clash(outputs, 6, options.params, c.config, options.sequence, options.map_in_path)) {
+  auto given = [](const char* path) { return std::string(path != nullptr ? path : ""); };
+  std::vector<CommandFile> inputs = {
+      {"--config", given(c.config)},
+      {"loop.vocabulary", options.params.loop.enabled ? options.params.loop.vocabulary : ""},
+      {"--map-in", given(options.map_in_path), "--map-out"}};
+  std::vector<std::string> input_folders;
+  add_sequence_inputs(options.sequence, &inputs, &input_folders);
+  if (!outputs_are_safe("rgbdtam replay",
+                        {{"--trajectory", given(options.trajectory_path)},
+                         {"--final-trajectory", given(options.final_trajectory_path)},
+                         {"--covariance", given(options.covariance_path)},
+                         {"--map", given(map_path)},
+                         {"--map-out", given(options.map_out_path)},
+                         {"--trace", given(options.trace_path)}},
+                        inputs, input_folders)) {
     return 2;
   }
   if (options.trace_path != nullptr &&
@@ -388,7 +330,7 @@ int replay_command(int argc, char** argv) {
     std::fprintf(stderr, "rgbdtam replay: no frame was tracked, so there is no trajectory\n");
     return 1;
   }
-  if (job->stopped_early()) return 130;  // as a shell reports a job ended by SIGINT
+  if (job->stopped_early()) return kInterruptedExitCode;
   return s.is_ok() ? 0 : 1;
 }
 
@@ -438,11 +380,33 @@ int run_command(int argc, char** argv) {
   job->finish();
   g_running = nullptr;
   job->print_summary();
-  if (job->runtime().counters().tracked == 0) {
+  const Status saved = job->final_map_save();
+  if (!saved.is_ok()) std::fprintf(stderr, "rgbdtam run: %s\n", saved.message());
+  const bool none_tracked = job->runtime().counters().tracked == 0;
+  if (none_tracked)
     std::fprintf(stderr, "rgbdtam run: no frame was tracked, so no pose was sent\n");
-    return 1;
+  if (!saved.is_ok()) return 1;
+  if (g_stop_requested != 0) return kInterruptedExitCode;
+  return none_tracked ? 1 : 0;
+}
+
+// A device named by a path (a replay folder, /dev/video0) exists; indices and URIs
+// ("0", "default") are only known to the backend.
+Status check_device_is_there(const Board& board) {
+  const char* device = board.sensor_device;
+  const bool folder = find_sensor_kind(board.sensor_kind)->device_is_a_folder;  // validated
+  if (!folder && device[0] != '/') return Status::ok();
+  struct stat st;
+  if (::stat(device, &st) != 0) {
+    return Status::error(StatusCode::kNotFound, "sensor.device %s: %s", device,
+                         std::strerror(errno));
   }
-  return 0;
+  if (folder && !S_ISDIR(st.st_mode)) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "sensor.device %s: not a folder (a %s sensor reads a recorded folder)",
+                         device, board.sensor_kind);
+  }
+  return Status::ok();
 }
 
 // What run checks before it opens anything, without opening the sensor: the board file and its
@@ -454,6 +418,7 @@ int check_command(int argc, char** argv) {
   Params params;
   Status s = load_board_and_params(options, &board, &params);
   if (s.is_ok() && !sensor_backend_in_build(board.sensor_kind)) s = missing_backend_error(board);
+  if (s.is_ok()) s = check_device_is_there(board);
   if (!s.is_ok()) {
     std::fprintf(stderr, "rgbdtam check: %s\n", s.message());
     return 1;
@@ -489,7 +454,7 @@ int record_command(int argc, char** argv) {
     std::fprintf(stderr, "rgbdtam record: %s\n", s.message());
     return 1;
   }
-  return 0;
+  return g_stop_requested != 0 ? kInterruptedExitCode : 0;
 }
 
 }  // namespace

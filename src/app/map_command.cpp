@@ -7,6 +7,7 @@
 
 #include "config_files.hpp"
 #include "map_export.hpp"
+#include "output_guard.hpp"
 #include "rgbdtam/runtime/map_file.hpp"
 
 namespace rgbdtam {
@@ -57,6 +58,15 @@ int export_command(int argc, char** argv) {
   }
   if (s.is_ok() && grid == nullptr) {
     s = Status::error(StatusCode::kInvalidArgument, "--grid <prefix> is required");
+  }
+  if (s.is_ok()) {
+    const std::string prefix = grid;
+    const std::vector<CommandFile> outputs = {{"--grid", prefix + ".pgm"},
+                                              {"--grid", prefix + ".yaml"},
+                                              {"--png", options.png ? prefix + ".png" : ""}};
+    if (!outputs_are_safe("rgbdtam map export", outputs, map_export_inputs(argv[0], options), {})) {
+      return 2;
+    }
   }
   LoadedMap map;
   LevelFrame level;

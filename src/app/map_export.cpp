@@ -120,6 +120,14 @@ Status write_file(const char* path, const char* text, size_t size) {
 }
 }  // namespace
 
+std::vector<CommandFile> map_export_inputs(const char* map_path, const MapExportOptions& options) {
+  std::vector<CommandFile> inputs = {{"the map", map_path}};
+  if (options.board_dir != nullptr) {
+    inputs.push_back({"--board", std::string(options.board_dir) + "/board.conf"});
+  }
+  return inputs;
+}
+
 bool take_map_export_arg(int argc, char** argv, int* i, MapExportOptions* o, Status* error) {
   const char* flag = argv[*i];
   const bool known = std::strcmp(flag, "--resolution") == 0 ||

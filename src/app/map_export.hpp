@@ -10,7 +10,9 @@
 // default link.T_b_c). The output says which.
 
 #include <memory>
+#include <vector>
 
+#include "output_guard.hpp"
 #include "rgbdtam/core/se3.hpp"
 #include "rgbdtam/core/status.hpp"
 #include "rgbdtam/runtime/map_file.hpp"
@@ -32,6 +34,9 @@ struct MapExportOptions {
 // Takes argv[*i] (and its value) when it is one of the options above; false when it is not
 // one. *error is set when it is one but its value is bad.
 bool take_map_export_arg(int argc, char** argv, int* i, MapExportOptions* options, Status* error);
+
+// What an export reads: the map, and the board file when --board names one.
+std::vector<CommandFile> map_export_inputs(const char* map_path, const MapExportOptions& options);
 
 // The largest map file the tools read (the format's own limit is far above any store).
 constexpr size_t kMaxMapFileBytes = size_t{4} << 30;

@@ -9,6 +9,7 @@
 #include "memory_budget.hpp"
 #include "rgbdtam/hal/atomic_file.hpp"
 #include "rgbdtam/hal/clock.hpp"
+#include "rgbdtam/hal/file.hpp"
 #include "rgbdtam/runtime/pose_link.hpp"
 
 namespace rgbdtam {
@@ -38,6 +39,11 @@ Status ReplayJob::init(const ReplayOptions& options) {
   if (source_.depth_list().bad_lines > 0) {
     std::fprintf(stderr, "warning: %d unreadable lines in depth.txt, skipped; first: %s\n",
                  source_.depth_list().bad_lines, source_.depth_list().first_problem.message());
+  }
+  // Outputs written at the end are checked now, not after the whole sequence.
+  for (const char* at_end :
+       {options.map_out_path, options.final_trajectory_path, options.trace_path}) {
+    if (at_end != nullptr) RGBDTAM_RETURN_IF_ERROR(check_can_create(at_end));
   }
   const size_t per_frame = sizeof(StampedPose) + sizeof(Eigen::Matrix<double, 6, 6>);
   Status vocabulary_error;
@@ -205,14 +211,16 @@ void ReplayJob::print_summary() const {
   options_.params.tracker.residuals.name(residuals, sizeof(residuals));
   std::printf("sequence: %s (%d frames listed), residuals %s\n", options_.sequence,
               source_.frame_count(), residuals);
+  // Without depth: none delivered, or none usable (nothing in range, not a surface, frozen).
   std::printf("frames: read %u, skipped %u, without depth %u; tracked %u, lost %u, resets %u\n",
-              rc.delivered, rc.skipped, rc.without_depth, c.tracked, c.lost, c.resets);
+              rc.delivered, rc.skipped, c.without_depth, c.tracked, c.lost, c.resets);
   std::printf(
       "health: %u frames failed a first check; %u recovered from other initial guesses, %u "
       "against the last valid frame; %u tracked on one term (the other did not fit); %u depth "
-      "frames set aside (not a surface)\n",
+      "frames set aside (not a surface), %u frozen (the last depth frame again)\n",
       c.retried, c.recovered_by_guesses, c.recovered_by_last_frame, c.single_term,
-      c.depth_not_surface);
+      c.depth_not_surface, c.depth_frozen);
+  warn_about_depth(c, "rgbdtam replay");
   std::printf("keyframes: %u created, %u reused, pool %d of %d, %d recycled\n", c.keyframes,
               c.reused, system_.tracking().keyframes().size(),
               system_.tracking().keyframes().capacity(), system_.tracking().keyframes().recycled());
@@ -307,6 +315,7 @@ void ReplayJob::print_json(const EvaluationReport& r) const {
       .integer("recovered_by_last_frame", c.recovered_by_last_frame)
       .integer("single_term", c.single_term)
       .integer("depth_not_surface", c.depth_not_surface)
+      .integer("depth_frozen", c.depth_frozen)
       .number("nees_mean", r.nees.pairs > 0 ? r.nees.mean : NAN)
       .number("nees_median", r.nees.pairs > 0 ? r.nees.median : NAN)
       .number("nees_p99", r.nees.pairs > 0 ? r.nees.p99 : NAN)

@@ -256,7 +256,9 @@ Status RunJob::open_map_file(bool loop) {
   } else {
     RGBDTAM_RETURN_IF_ERROR(load_map_file(board_.map_file, params_, runtime_.get(), &loaded_map_));
   }
-  if (params_.map_mode != MapMode::kSlam || board_.map_save_period_s == 0) return Status::ok();
+  if (params_.map_mode != MapMode::kSlam) return Status::ok();
+  RGBDTAM_RETURN_IF_ERROR(check_can_create(board_.map_file));  // saved at the end
+  if (board_.map_save_period_s == 0) return Status::ok();
   RGBDTAM_RETURN_IF_ERROR(checkpoint_file_.init(board_.map_file));
   checkpoint_.init(int64_t{board_.map_save_period_s} * 1'000'000'000,
                    runtime_->slam().map_meta(map_written_by(options_.written_by)),
@@ -266,6 +268,7 @@ Status RunJob::open_map_file(bool loop) {
 
 Status RunJob::start() {
   RGBDTAM_RETURN_IF_ERROR(runtime_->start());
+  started_ = true;
   RGBDTAM_RETURN_IF_ERROR(sensor_.live->start(board_.sensor));
   started_ns_ = last_progress_ns_ = monotonic_ns();
   return Status::ok();
@@ -309,7 +312,9 @@ bool RunJob::step() {
 }
 
 void RunJob::finish() {
-  if (finished_ || runtime_ == nullptr) return;
+  // After a failed init nothing ran, and the map file (maybe the one that failed to load)
+  // stays as it is.
+  if (finished_ || !started_) return;
   finished_ = true;
   wall_ns_ = monotonic_ns() - started_ns_;
   sensor_.live->stop();
@@ -392,6 +397,7 @@ void RunJob::print_summary() const {
       "kept) %u\n",
       c.frames, seconds, seconds > 0 ? c.frames / seconds : 0.0, c.tracked, c.lost, c.sensor_errors,
       withheld, sensor_.live->dropped());
+  warn_about_depth(runtime_->slam().tracking().counters(), "rgbdtam run");
   const RecoveryCounters& r = sensor_.recovery.counters();
   std::printf(
       "sensor recovery: %u stalls, %u USB resets (%u failed), %u reopens (%u failed), %u "
@@ -431,6 +437,15 @@ void RunJob::print_task_times() const {
       "while the next was built, %u built stale\n",
       builds.describe(1, spread, sizeof(spread)), static_cast<long long>(builds.count()),
       tracking.frames_awaiting_keyframe, tracking.keyframes_stale);
+}
+
+Status RunJob::final_map_save() const {
+  if (map_saved_.is_ok()) return map_saved_;
+  const char* kept = checkpoint_.saves() > 0  ? "the last save made while running"
+                     : loaded_map_.places > 0 ? "the map loaded at start"
+                                              : "nothing from this run";
+  return Status::error(map_saved_.code(), "map.file %s was not saved at the end (%s): it holds %s",
+                       board_.map_file, map_saved_.message(), kept);
 }
 
 void RunJob::print_map_file_summary() const {

@@ -73,6 +73,9 @@ class RunJob {
   void request_stop() { stop_requested_.store(true); }
   // Lets the mapper and the link finish, and joins them; then saves the board's map.file.
   void finish();
+  // After finish(): an error when map.file was to be saved and was not, saying what the file
+  // holds instead; ok otherwise.
+  Status final_map_save() const;
   void print_summary() const;
   // The board's map.file: what was loaded (places = 0: none), and how saving it went.
   const MapFileInfo& loaded_map() const { return loaded_map_; }
@@ -110,6 +113,7 @@ class RunJob {
   uint64_t memory_needed_bytes_ = 0;
   int64_t wall_ns_ = 0;
   uint32_t recoveries_reported_ = 0;
+  bool started_ = false;  // the runtime's threads run: finish() stops them and saves the map
   bool finished_ = false;
 };
 

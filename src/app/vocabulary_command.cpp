@@ -10,6 +10,7 @@
 
 #include "config_files.hpp"
 #include "frontend_frames.hpp"
+#include "output_guard.hpp"
 #include "rgbdtam/core/features.hpp"
 #include "rgbdtam/hal/file.hpp"
 
@@ -128,6 +129,16 @@ Status collect(const char* sequence, const Params& p, int every, bool augment,
 int train(const TrainOptions& o) {
   Params p;
   Status s = read_params_file(o.config, &p);
+  if (!s.is_ok()) {
+    std::fprintf(stderr, "rgbdtam vocabulary train: %s\n", s.message());
+    return 1;
+  }
+  // The vocabulary the config names is not read here, but every map saved with it needs it.
+  std::vector<CommandFile> inputs = {{"--config", o.config},
+                                     {"loop.vocabulary", p.loop.vocabulary}};
+  std::vector<std::string> folders;
+  for (const char* sequence : o.sequences) add_sequence_inputs(sequence, &inputs, &folders);
+  if (!outputs_are_safe("rgbdtam vocabulary train", {{"--out", o.out}}, inputs, folders)) return 2;
   std::vector<std::vector<Descriptor>> images;
   size_t descriptors = 0;
   for (const char* sequence : o.sequences) {

@@ -61,6 +61,33 @@ uint32_t failed_health_checks(const TrackResult& r, const HealthContext& context
   return failed;
 }
 
+namespace {
+// FNV-1a over every kStride-th value: 44 000 of a VGA frame's pixels, a few tens of
+// microseconds; a real sensor's noise changes far more of them than that stride skips.
+template <typename T>
+uint64_t sampled_fingerprint(const T* values, int count) {
+  constexpr int kStride = 7;
+  uint64_t h = 14695981039346656037ull;
+  for (int i = 0; i < count; i += kStride) {
+    h = (h ^ static_cast<uint64_t>(values[i])) * 1099511628211ull;
+  }
+  return h;
+}
+}  // namespace
+
+bool FrozenDepthCheck::frozen(const uint16_t* depth, int64_t depth_stamp_ns, const uint8_t* gray,
+                              int pixels) {
+  const uint64_t d = sampled_fingerprint(depth, pixels);
+  const uint64_t g = sampled_fingerprint(gray, pixels);
+  const bool repeated = has_previous_ && depth_stamp_ns != stamp_ns_ && d == depth_ && g != gray_;
+  repeats_ = repeated ? repeats_ + 1 : 0;
+  depth_ = d;
+  gray_ = g;
+  stamp_ns_ = depth_stamp_ns;
+  has_previous_ = true;
+  return repeats_ >= kFrozenAfterRepeats;
+}
+
 void describe_health(uint32_t failed, char* buf, int size) {
   static constexpr struct {
     uint32_t bit;
@@ -68,7 +95,8 @@ void describe_health(uint32_t failed, char* buf, int size) {
   } kNames[] = {{kFewResiduals, "few residuals"},       {kPhotometricMisfit, "photometric misfit"},
                 {kGeometricMisfit, "geometric misfit"}, {kCostAboveTypical, "cost above typical"},
                 {kIllConditioned, "ill-conditioned"},   {kTooFast, "too fast"},
-                {kWeakDirection, "weak direction"},     {kAmbiguous, "ambiguous"}};
+                {kWeakDirection, "weak direction"},     {kAmbiguous, "ambiguous"},
+                {kDepthFrozen, "depth frozen"}};
   if (size <= 0) return;
   if (failed == 0) {
     std::snprintf(buf, static_cast<size_t>(size), "healthy");

@@ -77,7 +77,11 @@ Status AtomicFileWriter::commit() {
   if (::close(fd_) != 0) (void)fail("close failed");
   fd_ = -1;
   if (status_.is_ok() && std::rename(partial_, path_) != 0) (void)fail("cannot rename into place");
-  if (status_.is_ok()) sync_folder_of(path_);
+  if (status_.is_ok()) {
+    sync_folder_of(path_);
+  } else {
+    (void)::unlink(partial_);  // half a map is of no use, and may fill what the disk has left
+  }
   return status_;
 }
 

@@ -138,8 +138,35 @@ Status OutputFile::commit() {
   if (status_.is_ok() && !direct_ && std::rename(partial_, path_) != 0) {
     (void)fail("cannot rename into place");
   }
-  if (status_.is_ok() && !direct_) sync_folder_of(path_);
+  if (!direct_) {
+    if (status_.is_ok()) {
+      sync_folder_of(path_);
+    } else {
+      (void)::unlink(partial_);  // a failed write leaves nothing behind
+    }
+  }
   return status_;
+}
+
+Status check_can_create(const char* path) {
+  struct stat st;
+  if (::stat(path, &st) == 0) {
+    if (S_ISDIR(st.st_mode)) {
+      return Status::error(StatusCode::kInvalidArgument, "%s: is a folder, not a file", path);
+    }
+    if (!S_ISREG(st.st_mode)) return Status::ok();  // a device or FIFO, written directly
+  }
+  char partial[PATH_MAX + 16];
+  std::snprintf(partial, sizeof(partial), "%s.partial", path);
+  const bool was_there = ::stat(partial, &st) == 0;
+  const int fd = ::open(partial, O_WRONLY | O_CREAT | O_CLOEXEC, 0644);
+  if (fd < 0) {
+    return Status::error(StatusCode::kIoError, "%s: cannot create: %s", partial,
+                         std::strerror(errno));
+  }
+  ::close(fd);
+  if (!was_there) (void)::unlink(partial);
+  return Status::ok();
 }
 
 }  // namespace rgbdtam

@@ -8,6 +8,8 @@
 namespace rgbdtam {
 namespace {
 
+constexpr double kMaxMountOffsetM = 10.0;  // link.T_b_c's doc says so
+
 bool parse_pose(const char* value, void* field) {
   double v[7];
   int used = 0;
@@ -21,6 +23,11 @@ bool parse_pose(const char* value, void* field) {
   }
   const Eigen::Quaterniond q(v[0], v[1], v[2], v[3]);
   if (std::abs(q.norm() - 1.0) > 1e-3) return false;  // a typo, not a rotation
+  // A camera is mounted on its vehicle: an offset of kilometres is a typo that would put every
+  // pose sent that far off (1e300 reached the link as inf).
+  for (int i = 4; i < 7; ++i) {
+    if (std::abs(v[i]) > kMaxMountOffsetM) return false;
+  }
   *static_cast<SE3*>(field) = SE3(q, Vector3d(v[4], v[5], v[6]));
   return true;
 }
@@ -84,8 +91,9 @@ const KeySpec kSpecs[] = {
      RGBDTAM_FIELD(link_system_id), false},
     {"link.component_id", ValueType::kInt, 1, 255, "", "MAVLink component id",
      RGBDTAM_FIELD(link_component_id), false},
-    {"link.T_b_c", ValueType::kCustom, 0, 0, "", "body from camera: qw qx qy qz tx ty tz (m)",
-     RGBDTAM_FIELD(T_b_c), false, parse_pose, print_pose},
+    {"link.T_b_c", ValueType::kCustom, 0, 0, "",
+     "body from camera: qw qx qy qz (unit) tx ty tz (m, each within 10)", RGBDTAM_FIELD(T_b_c),
+     false, parse_pose, print_pose},
     {"obstacle.rate_hz", ValueType::kReal, 0, 30, "Hz",
      "OBSTACLE_DISTANCE from the depth image this often (0: never)",
      RGBDTAM_FIELD(obstacle_rate_hz), false},
@@ -111,7 +119,8 @@ const KeySpec kSpecs[] = {
      RGBDTAM_FIELD(origin_latitude_deg), false},
     {"origin.longitude_deg", ValueType::kReal, -180, 180, "deg", "its longitude (WGS84)",
      RGBDTAM_FIELD(origin_longitude_deg), false},
-    {"origin.altitude_m", ValueType::kReal, -1000, 10000, "m", "its altitude above mean sea level",
+    {"origin.altitude_m", ValueType::kReal, -1000, 10000, "m",
+     "its altitude above mean sea level (with the latitude; 0 when not set)",
      RGBDTAM_FIELD(origin_altitude_m), false},
     RGBDTAM_TEXT("gpio.chip", "GPIO chip device (empty: no GPIO)", gpio_chip, false),
     {"gpio.led_line", ValueType::kInt, -1, 1023, "", "status LED line (-1: none)",
@@ -254,6 +263,19 @@ Status validate_board(const Board& b) {
                          "board '%s': sensor.kind '%s' is not one of %s", b.name, b.sensor_kind,
                          kinds);
   }
+  // Required keys may still be given empty (--board-set sensor.device=); the backend would
+  // then report a path it made up.
+  if (b.sensor_device[0] == '\0') {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "board '%s': sensor.device is empty: name the %s sensor (docs/sensors.md)",
+                         b.name, b.sensor_kind);
+  }
+  if (b.sensor_config[0] == '\0') {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "board '%s': sensor.config is empty: name the camera's params file "
+                         "(config/)",
+                         b.name);
+  }
   unsigned vendor = 0, product = 0;
   int used = 0;
   if (b.sensor_usb_id[0] != '\0' &&
@@ -284,6 +306,12 @@ Status validate_board(const Board& b) {
   if (std::isnan(b.origin_latitude_deg) != std::isnan(b.origin_longitude_deg)) {
     return Status::error(StatusCode::kInvalidArgument,
                          "board '%s': origin.latitude_deg and origin.longitude_deg go together",
+                         b.name);
+  }
+  if (!std::isnan(b.origin_altitude_m) && std::isnan(b.origin_latitude_deg)) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "board '%s': origin.altitude_m needs origin.latitude_deg and "
+                         "origin.longitude_deg (an altitude alone gives the autopilot no origin)",
                          b.name);
   }
   if (!one_of(b.link_kind, kLinks, 2)) {

@@ -29,8 +29,8 @@ Status FirmwareRuntime::init(const Params& params, const Board& board, ByteLink*
         static_cast<int32_t>(std::lround(board.origin_latitude_deg * 1e7));
     link_config.origin_longitude_e7 =
         static_cast<int32_t>(std::lround(board.origin_longitude_deg * 1e7));
-    link_config.origin_altitude_mm =
-        static_cast<int32_t>(std::lround(board.origin_altitude_m * 1e3));
+    link_config.origin_altitude_mm = static_cast<int32_t>(
+        std::lround(std::isnan(board.origin_altitude_m) ? 0.0 : board.origin_altitude_m * 1e3));
   }
   link_.init(link_config, link, kLinkQueueSlots, clock);
   attitude_.init(board.T_b_c, board.autopilot_attitude_sigma_rad);

@@ -16,6 +16,10 @@ constexpr size_t kPlaceBytes = 4 + 8 + 7 * 8 + 4 + 4;
 constexpr size_t kFeatureBytes = 32 + 5 * 4, kWordBytes = 8, kEdgeBytes = 8 + 4 + 7 * 8 + 36 * 8;
 constexpr int kLargestSide = 1 << 14;
 constexpr uint32_t kMostWords = 1u << 22;  // the shipped vocabulary has 10^4
+// Ranges a map this firmware made always keeps, checked whatever the checksum says: a place
+// 1e300 m away reached the link as a pose, and ids near 2^32 wrapped onto the map's own.
+constexpr double kMostMetresFromOrigin = 1e4;    // no indoor map reaches 10 km
+constexpr uint32_t kMostKeyframeIds = 1u << 31;  // and ids leave room for as many new ones
 constexpr int kLastEdgeKind = static_cast<int>(EdgeKind::kReuse);
 
 // Fields through to the sink, hashed on the way.
@@ -53,7 +57,7 @@ bool read_pose(ByteReader* r, SE3* T) {
     if (!std::isfinite(v)) return false;
   }
   for (const double v : t) {
-    if (!std::isfinite(v)) return false;
+    if (!(std::fabs(v) <= kMostMetresFromOrigin)) return false;  // NaN and inf too
   }
   const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
   if (std::fabs(norm - 1.0) > 1e-6) return false;
@@ -264,6 +268,19 @@ Status read_map_info(const uint8_t* data, size_t size, MapFileInfo* info) {
                                uint64_t{m.edges} * kEdgeBytes;
   if (least_bytes > size || m.vocabulary_words > kMostWords) {
     return Status::error(StatusCode::kCorrupt, "map file: header counts damaged");
+  }
+  if (m.next_keyframe_id > kMostKeyframeIds) {
+    return Status::error(StatusCode::kCorrupt,
+                         "map file: next keyframe id %u is out of range (at most %u)",
+                         m.next_keyframe_id, kMostKeyframeIds);
+  }
+  for (int k = 0; k < 3; ++k) {
+    if (!(std::fabs(m.lowest_m[k]) <= kMostMetresFromOrigin) ||
+        !(std::fabs(m.highest_m[k]) <= kMostMetresFromOrigin)) {
+      return Status::error(StatusCode::kCorrupt,
+                           "map file: its bounds reach beyond %.0f m from the origin",
+                           kMostMetresFromOrigin);
+    }
   }
   *info = m;
   return Status::ok();

@@ -60,7 +60,7 @@ const KeySpec kSpecs[] = {
      RGBDTAM_FIELD(distortion.k3), false},
     {"depth.factor", ValueType::kReal, 1e-3, 1e6, "1/m", "raw depth units per metre",
      RGBDTAM_FIELD(sensor.depth_factor), true},
-    {"depth.min", ValueType::kReal, 0.0, 100, "m", "nearest valid sensor depth",
+    {"depth.min", ValueType::kReal, 0.01, 100, "m", "nearest valid sensor depth",
      RGBDTAM_FIELD(sensor.depth_range.min_m), false},
     {"depth.max", ValueType::kReal, 0.1, 100, "m", "farthest valid sensor depth",
      RGBDTAM_FIELD(sensor.depth_range.max_m), false},
@@ -253,6 +253,14 @@ Status check_consistency(const char* source, const Params& p) {
                          "%s: key 'map.keyframe_pool' (%d) must be at least map.queue_frames + 5 "
                          "(%d) when mapping is enabled",
                          source, p.keyframe_pool_size, pool_needed);
+  }
+  int iterations = 0;
+  for (const int n : p.tracker.max_iterations) iterations += n;
+  if (iterations == 0) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "%s: keys 'tracker.iterations_l0'..'l3' are all 0: the tracker would "
+                         "never move from its prediction (one level at 0 is fine)",
+                         source);
   }
   if (p.tracker.canny_low > p.tracker.canny_high) {
     return Status::error(StatusCode::kInvalidArgument,

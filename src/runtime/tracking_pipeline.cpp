@@ -31,21 +31,25 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
   build_pending_keyframe();  // in case the caller has not
   adopt_built_keyframe();
   PoseEstimate out = begin_output(frame);
-  prepare(frame, &out);
+  const uint32_t sensor_failed = prepare(frame, &out);
   if (keyframes_.reference() == nullptr) {
     start(frame, &out);
   } else {
     keyframes_.adopt_all_maps();
     adopt_corrections();
-    const Attempt a = estimate(frame.timestamp_ns);
     out.keyframe_id = keyframes_.reference()->id;
-    // A frame lost because the scene repeats or leaves a direction free is no better found by
-    // its appearance: the loss ends in a restart, not a relocalisation.
-    const bool look_alike_scene = (a.failed & (kAmbiguous | kWeakDirection)) != 0;
-    if (a.failed == 0) {
-      accept(a, frame, &out, true);
-    } else if (look_alike_scene || !relocalise(frame, &out)) {
-      on_lost(frame, a.failed, &out);
+    if (sensor_failed != 0) {
+      on_lost(frame, sensor_failed, &out);  // the sensor, not the scene: nothing to search
+    } else {
+      const Attempt a = estimate(frame.timestamp_ns);
+      // A frame lost because the scene repeats or leaves a direction free is no better found
+      // by its appearance: the loss ends in a restart, not a relocalisation.
+      const bool look_alike_scene = (a.failed & (kAmbiguous | kWeakDirection)) != 0;
+      if (a.failed == 0) {
+        accept(a, frame, &out, true);
+      } else if (look_alike_scene || !relocalise(frame, &out)) {
+        on_lost(frame, a.failed, &out);
+      }
     }
     report(frame.timestamp_ns, &out);
   }
@@ -68,7 +72,7 @@ PoseEstimate TrackingPipeline::begin_output(const SensorFrame& frame) {
   return out;
 }
 
-void TrackingPipeline::prepare(const SensorFrame& frame, PoseEstimate* out) {
+uint32_t TrackingPipeline::prepare(const SensorFrame& frame, PoseEstimate* out) {
   RGBDTAM_ASSERT(
       frame.width_px == params_.camera.width_px && frame.height_px == params_.camera.height_px,
       "sensor frame size differs from the configured camera");
@@ -80,18 +84,27 @@ void TrackingPipeline::prepare(const SensorFrame& frame, PoseEstimate* out) {
   // would warp the photometric term to anywhere, so the frame counts as without depth.
   constexpr int kSurfaceStridePx = 4;
   constexpr double kMinSurfaceFraction = 0.5;
+  // Depth with no pixel in range (all 0, all saturated) is no depth either.
   bool depth_usable = false;
+  uint32_t failed = 0;
   if (frame.depth != nullptr) {
     pyramid.build_inverse_depth(frame.depth, undistorter_);
     const SurfaceCount c = count_surface_pixels(pyramid.inverse_depth(0), kSurfaceStridePx);
-    depth_usable = c.on_surface >= kMinSurfaceFraction * c.valid;
-    if (!depth_usable) ++counters_.depth_not_surface;
+    depth_usable = c.valid > 0 && c.on_surface >= kMinSurfaceFraction * c.valid;
+    if (c.valid > 0 && !depth_usable) ++counters_.depth_not_surface;
+    if (frozen_depth_.frozen(frame.depth, frame.depth_timestamp_ns, frame.gray,
+                              frame.width_px * frame.height_px)) {
+      failed |= kDepthFrozen;
+      depth_usable = false;
+      ++counters_.depth_frozen;
+    }
   }
   if (!depth_usable) {
     pyramid.clear_depth();
     out->flags |= kNoDepth;
     ++counters_.without_depth;
   }
+  return failed;
 }
 
 void TrackingPipeline::start(const SensorFrame& frame, PoseEstimate* out) {

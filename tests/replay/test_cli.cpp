@@ -14,6 +14,7 @@
 
 #include "stress_variants.hpp"
 #include "test_paths.hpp"
+#include "tum_writer.hpp"
 
 namespace rgbdtam {
 namespace {
@@ -123,6 +124,64 @@ TEST(Cli, AnOutputThatIsAnInputIsRefusedAndTheInputKept) {
   EXPECT_EQ(read_all(gt), before);
   o = rgbdtam("replay " + dir + "/seq --config " + config() + " --map " + dir + "/seq/rgb.txt");
   EXPECT_EQ(o.exit_code, 2);
+}
+
+// Issue 35, items 7 to 9: every command checks its outputs against its inputs as replay does,
+// refuses (exit 2) and keeps the input.
+TEST(Cli, NoCommandWritesOverItsOwnInputs) {
+  const std::string dir = testing::make_temp_dir("cli_no_command_replaces");
+  ASSERT_EQ(std::system(("cp -r " + clip() + " " + dir + "/seq").c_str()), 0);
+  const std::string seq = dir + "/seq";
+  const std::string map = dir + "/m.yaml";  // a map named like a grid's output
+  ASSERT_EQ(rgbdtam("replay " + seq + " --config " + config() +
+                    " --quiet --max-frames 10 --map-out " + map)
+                .exit_code,
+            0);
+  std::string image;
+  {
+    std::ifstream list(seq + "/rgb.txt");
+    for (std::string line; std::getline(list, line) && image.empty();) {
+      if (!line.empty() && line[0] != '#') image = seq + "/" + line.substr(line.find(' ') + 1);
+    }
+  }
+  const struct {
+    std::string command, kept;
+  } cases[] = {
+      {"vocabulary train " + seq + " --config " + config() + " --out " + seq + "/rgb.txt",
+       seq + "/rgb.txt"},
+      {"vocabulary train " + seq + " --config " + config() + " --out " + image, image},
+      {"vocabulary train " + seq + " --config " + config() + " --out " + config(), config()},
+      {"vocabulary train " + seq + " --config " + config() + " --out " +
+           testing::source_path("data/vocabulary/tum-k10-l4.voc"),
+       testing::source_path("data/vocabulary/tum-k10-l4.voc")},
+      {"eval " + seq + "/groundtruth.txt " + seq + "/groundtruth.txt --plot " + seq +
+           "/groundtruth.txt",
+       seq + "/groundtruth.txt"},
+      {"eval " + seq + "/groundtruth.txt " + seq + "/groundtruth.txt --frames " + seq +
+           "/rgb.txt --plot " + seq + "/rgb.txt",
+       seq + "/rgb.txt"},
+      {"map export " + map + " --grid " + dir + "/m", map},
+  };
+  for (const auto& c : cases) {
+    const std::string before = read_all(c.kept);
+    const Outcome o = rgbdtam(c.command);
+    EXPECT_EQ(o.exit_code, 2) << c.command << "\n" << o.err;
+    EXPECT_TRUE(o.err.find("is an input of this run") != std::string::npos ||
+                o.err.find("would replace one of the inputs in") != std::string::npos)
+        << o.err;
+    EXPECT_EQ(read_all(c.kept), before) << c.kept;
+  }
+#ifdef RGBDTAM_OCTOMAP_BINARY
+  const std::string before = read_all(map);
+  const std::string command = std::string(RGBDTAM_OCTOMAP_BINARY) + " " + map + " " + map +
+                              " > /dev/null 2> " + dir + "/octomap.err";
+  const int status = std::system(command.c_str());
+  EXPECT_EQ(WEXITSTATUS(status), 2);
+  EXPECT_NE(read_all(dir + "/octomap.err")
+                .find("rgbdtam-octomap: <out.bt> " + map + " is an input of this run"),
+            std::string::npos);
+  EXPECT_EQ(read_all(map), before);
+#endif
 }
 
 // Issue 23, defect 1: the vocabulary is an input too.
@@ -239,6 +298,106 @@ TEST(Cli, AMapFileIsDescribedAndExportedAsAGridForPlanners) {
   EXPECT_EQ(rgbdtam("map frobnicate").exit_code, 2);
 }
 
+// Issue 35: settings that could never be right are refused at start, each named.
+std::string host_board() { return testing::source_path("board/host-emulation"); }
+
+TEST(Cli, AMountingOffsetOfKilometresIsRefused) {
+  for (const char* offset : {"1e300", "1e39", "11"}) {
+    const Outcome o = rgbdtam("check --board " + host_board() +
+                              " --board-set 'link.T_b_c=1 0 0 0 " + offset + " 0 0'");
+    EXPECT_EQ(o.exit_code, 1) << offset;
+    EXPECT_NE(o.err.find("key 'link.T_b_c': '1 0 0 0 " + std::string(offset) +
+                         " 0 0' is not valid (body from camera: qw qx qy qz (unit) tx ty tz (m, "
+                         "each within 10))"),
+              std::string::npos)
+        << o.err;
+  }
+  const Outcome metres =
+      rgbdtam("check --board " + host_board() + " --board-set 'link.T_b_c=1 0 0 0 0.2 -0.05 9.5'");
+  EXPECT_EQ(metres.exit_code, 0) << metres.err;
+}
+
+TEST(Cli, EveryTrackerLevelAtZeroIterationsIsRefusedButOneIsFine) {
+  std::string all_zero;
+  for (const char* level : {"l0", "l1", "l2", "l3"}) {
+    all_zero += std::string(" --set tracker.iterations_") + level + "=0";
+  }
+  const Outcome o = rgbdtam("replay " + clip() + " --config " + config() + all_zero);
+  EXPECT_EQ(o.exit_code, 1);
+  EXPECT_NE(o.err.find("'tracker.iterations_l0'..'l3' are all 0"), std::string::npos) << o.err;
+  const Outcome one = rgbdtam("replay " + clip() + " --config " + config() +
+                              " --set tracker.iterations_l0=0 --max-frames 5 --quiet");
+  EXPECT_EQ(one.exit_code, 0) << one.err;
+}
+
+TEST(Cli, ANearestDepthOfZeroIsRefused) {
+  const Outcome o = rgbdtam("replay " + clip() + " --config " + config() + " --set depth.min=0");
+  EXPECT_EQ(o.exit_code, 1);
+  EXPECT_NE(o.err.find("'depth.min'"), std::string::npos) << o.err;
+  EXPECT_NE(o.err.find("0.01"), std::string::npos) << o.err;
+}
+
+TEST(Cli, AnAltitudeWithoutItsLatitudeAndLongitudeIsRefused) {
+  const Outcome o = rgbdtam("check --board " + host_board() + " --board-set origin.altitude_m=120");
+  EXPECT_EQ(o.exit_code, 1);
+  EXPECT_NE(o.err.find("origin.altitude_m needs origin.latitude_deg and origin.longitude_deg"),
+            std::string::npos)
+      << o.err;
+  const Outcome whole = rgbdtam("check --board " + host_board() +
+                                " --board-set origin.altitude_m=120 --board-set "
+                                "origin.latitude_deg=47.4 --board-set origin.longitude_deg=8.5");
+  EXPECT_EQ(whole.exit_code, 0) << whole.err;
+}
+
+TEST(Cli, AnEmptyOrMissingDeviceOrConfigIsNamedByCheckAndRun) {
+  for (const char* command : {"check", "run"}) {
+    Outcome o = rgbdtam(std::string(command) + " --board " + host_board() +
+                        " --board-set sensor.device= --quiet");
+    EXPECT_EQ(o.exit_code, 1) << command;
+    EXPECT_NE(o.err.find("sensor.device is empty: name the replay sensor"), std::string::npos)
+        << o.err;
+    o = rgbdtam(std::string(command) + " --board " + host_board() +
+                " --board-set sensor.config= --quiet");
+    EXPECT_EQ(o.exit_code, 1) << command;
+    EXPECT_NE(o.err.find("sensor.config is empty"), std::string::npos) << o.err;
+  }
+  const Outcome missing =
+      rgbdtam("check --board " + host_board() + " --board-set sensor.device=/nonexistent/sequence");
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_NE(missing.err.find("sensor.device /nonexistent/sequence: No such file or directory"),
+            std::string::npos)
+      << missing.err;
+  const Outcome file = rgbdtam("check --board " + host_board() +
+                               " --board-set sensor.device=" + clip() + "/rgb.txt");
+  EXPECT_EQ(file.exit_code, 1);
+  EXPECT_NE(file.err.find("not a folder"), std::string::npos) << file.err;
+}
+
+// Issue 35, item 14: a board map that does not load ends run with its message; nothing ran,
+// so nothing is saved over it.
+TEST(Cli, ABoardMapThatFailsToLoadEndsRunWithItsMessageAndStaysAsItWas) {
+  const std::string dir = testing::make_temp_dir("cli_board_map");
+  ASSERT_TRUE(testing::write_text(dir + "/damaged.map", "RGBDTAM map, but not really\n"));
+  ASSERT_EQ(::mkdir((dir + "/folder.map").c_str(), 0755), 0);
+  const struct {
+    std::string map, extra, message;
+  } cases[] = {
+      {dir + "/damaged.map", "", "damaged.map"},
+      {config(), "", "not an rgbdtam map file"},
+      {dir + "/folder.map", "", "folder.map"},
+      {dir + "/damaged.map", " --set loop.enabled=false", "needs loop closure"},
+  };
+  for (const auto& c : cases) {
+    const std::string before = read_all(c.map);
+    const Outcome o = rgbdtam("run --board " + host_board() + " --board-set map.file=" + c.map +
+                              c.extra + " --max-frames 5 --quiet");
+    EXPECT_EQ(o.exit_code, 1) << c.map << c.extra << "\n" << o.err;
+    EXPECT_NE(o.err.find(c.message), std::string::npos) << o.err;
+    EXPECT_EQ(o.err.find("assertion failed"), std::string::npos) << o.err;
+    EXPECT_EQ(read_all(c.map), before);
+  }
+}
+
 // Issue 23, defect 3: validation knows the smallest image every component takes.
 TEST(Cli, ACameraTooSmallIsRefusedWithItsMinimum) {
   const Outcome o = rgbdtam("replay " + clip() + " --config " + config() + " --set camera.width=8");
@@ -255,6 +414,56 @@ TEST(Cli, AFileSizeLimitIsAClearErrorNotASilentDeath) {
               "ulimit -f 16;");
   EXPECT_EQ(o.exit_code, 1) << o.err;
   EXPECT_NE(o.err.find("m.ply.partial: write failed: File too large"), std::string::npos) << o.err;
+  EXPECT_FALSE(exists(dir + "/m.ply.partial")) << "issue 35, item 11: nothing left behind";
+}
+
+// Issue 35, items 11 and 12: an output written at the end is checked at the start, and a
+// failed write leaves no .partial file.
+TEST(Cli, AnOutputWrittenAtTheEndIsCheckedAtTheStartAndAFailureLeavesNothing) {
+  const std::string dir = testing::make_temp_dir("cli_end_outputs");
+  for (const char* option : {"--map-out", "--final-trajectory"}) {
+    Outcome o = rgbdtam("replay " + clip() + " --config " + config() + " " + option + " " + dir);
+    EXPECT_EQ(o.exit_code, 1) << option;
+    EXPECT_NE(o.err.find(dir + ": is a folder, not a file"), std::string::npos) << o.err;
+    EXPECT_EQ(o.out.find("frames: read"), std::string::npos) << "refused before the replay";
+    o = rgbdtam("replay " + clip() + " --config " + config() + " " + option + " " + dir +
+                "/missing/x");
+    EXPECT_EQ(o.exit_code, 1) << option;
+    EXPECT_NE(o.err.find("/missing/x.partial: cannot create: No such file or directory"),
+              std::string::npos)
+        << o.err;
+  }
+  const Outcome full = rgbdtam("replay " + clip() + " --config " + config() +
+                                   " --quiet --max-frames 10 --map-out " + dir + "/m.map",
+                               "ulimit -f 16;");
+  EXPECT_EQ(full.exit_code, 1) << full.err;
+  EXPECT_NE(full.err.find("m.map.partial: write failed: File too large"), std::string::npos)
+      << full.err;
+  EXPECT_FALSE(exists(dir + "/m.map.partial"));
+  EXPECT_FALSE(exists(dir + "/m.map"));
+}
+
+// Issue 35, items 10 and 13: a run whose final map save fails says so and what the file holds,
+// and exits 1; a map is extended in place by naming it as input and output.
+TEST(Cli, AFailedFinalMapSaveIsAFailedRunAndAMapIsExtendedInPlace) {
+  const std::string dir = testing::make_temp_dir("cli_map_save");
+  const Outcome run = rgbdtam("run --board " + host_board() + " --board-set map.file=" + dir +
+                                  "/board.map --max-frames 20 --quiet",
+                              "ulimit -f 16;");
+  EXPECT_EQ(run.exit_code, 1) << run.err;
+  EXPECT_NE(run.err.find("board.map was not saved at the end ("), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("File too large): it holds nothing from this run"), std::string::npos)
+      << run.err;
+  EXPECT_FALSE(exists(dir + "/board.map.partial"));
+
+  const std::string map = dir + "/clip.map";
+  Outcome o = rgbdtam("replay " + clip() + " --config " + config() +
+                      " --quiet --max-frames 20 --map-out " + map);
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  o = rgbdtam("replay " + clip() + " --config " + config() + " --quiet --max-frames 20 --map-in " +
+              map + " --map-out " + map);
+  EXPECT_EQ(o.exit_code, 0) << o.err;
+  EXPECT_NE(o.out.find("places saved in"), std::string::npos) << o.out;
 }
 
 TEST(Cli, OutputsAppearWhenCompleteAndAFullDiskIsNamed) {
@@ -318,14 +527,15 @@ TEST_P(CliStop, EndsRunAndRecordWithTheirSummaries) {
   const std::string board =
       testing::source_path("board/host-emulation") + " --board-set sensor.device=" + seq;
   const std::string wrapper = std::string("timeout --preserve-status -s ") + GetParam() + " 3";
+  // Issue 35, item 22: interrupted, as replay says it (exit 130), with the summary printed.
   const Outcome run = rgbdtam("run --board " + board + " --quiet", wrapper);
-  EXPECT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_EQ(run.exit_code, 130) << run.err;
   EXPECT_NE(run.out.find("frames: "), std::string::npos) << run.out;
   // Issue 23, defect 8: no word of withheld outage messages when there was no outage.
   EXPECT_EQ(run.out.find("not posted"), std::string::npos) << run.out;
   const std::string dir = testing::make_temp_dir("cli_stop_record");
   const Outcome record = rgbdtam("record --board " + board + " " + dir + "/rec", wrapper);
-  EXPECT_EQ(record.exit_code, 0) << record.err;
+  EXPECT_EQ(record.exit_code, 130) << record.err;
   EXPECT_TRUE(exists(dir + "/rec/rgb.txt") && exists(dir + "/rec/depth.txt")) << record.err;
   EXPECT_FALSE(exists(dir + "/rec/rgb.txt.partial")) << record.err;
 }

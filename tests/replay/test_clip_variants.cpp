@@ -50,6 +50,29 @@ TEST(ClipVariants, NoiseInGivesNoPoseOut) {
   testing::expect_tracked_or_lost(colour, "clip with noise for colour", 0.9);
 }
 
+// Issue 35, items 2 and 18: depth as a failed sensor gives it. One value in every pixel, frame
+// after frame, repeats the last depth frame while the image moves: from its second repeat on
+// every frame is lost (the first frame is the origin, the second within a frame's motion of
+// it). Depth with no pixel in range is no depth: nothing is tracked, and the frames are
+// counted as without depth.
+TEST(ClipVariants, DepthAsAFailedSensorGivesItSendsNoPose) {
+  const std::string dir = testing::make_temp_dir("clip_stuck_depth");
+  const std::string clip = testing::source_path("data/tum_fr1_xyz_clip");
+  const std::string config = testing::source_path("config/tum_fr1.conf");
+  ASSERT_TRUE(testing::noise_sequence(clip, dir + "/frozen", config, "depth-1m", 1));
+  const auto frozen = testing::replay_and_evaluate(dir + "/frozen", config);
+  EXPECT_EQ(frozen.counters.frames, 50u);
+  EXPECT_LE(frozen.counters.tracked, 2u);
+  EXPECT_EQ(frozen.counters.depth_frozen, 48u);
+  EXPECT_EQ(frozen.report.false_valid.count, 0);
+  for (const char* kind : {"depth-zero", "depth-saturated"}) {
+    ASSERT_TRUE(testing::noise_sequence(clip, dir + "/" + kind, config, kind, 1));
+    const auto out = testing::replay_and_evaluate(dir + "/" + kind, config);
+    EXPECT_EQ(out.counters.tracked, 0u) << kind;
+    EXPECT_EQ(out.counters.without_depth, 50u) << kind;
+  }
+}
+
 // The clip wandered over (rgbdtam-stress wander, as the long soak's sequence is made): reversals,
 // twice the speed and jumps after outages, with every frame's ground truth carried along.
 TEST(ClipVariants, TheClipWanderedOverIsNeverFalseValid) {

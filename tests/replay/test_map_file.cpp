@@ -9,6 +9,8 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <memory>
@@ -162,6 +164,24 @@ TEST_F(MapFile, DamagedOrMismatchedFilesAreRefusedWithTheReason) {
     flipped[random() % flipped.size()] ^= static_cast<uint8_t>(1u << (random() % 8));
     EXPECT_NE(refusal(flipped).find("checksum mismatch"), std::string::npos);
   }
+  // Issue 35, item 5: values out of range are damage even under a valid checksum.
+  auto resealed = [](std::vector<uint8_t> bytes, size_t at, const void* value, size_t n) {
+    std::memcpy(&bytes[at], value, n);
+    uint32_t h = 2166136261u;  // the file's FNV-1a
+    for (size_t i = 0; i + 4 < bytes.size(); ++i) h = (h ^ bytes[i]) * 16777619u;
+    std::memcpy(&bytes[bytes.size() - 4], &h, 4);
+    return bytes;
+  };
+  constexpr size_t kNextKeyframeIdAt = 76, kFirstPlaceXAt = 240 + 4 + 8 + 32;
+  const uint32_t last_id = 0xFFFFFFFFu;
+  EXPECT_NE(refusal(resealed(good, kNextKeyframeIdAt, &last_id, 4)).find("next keyframe id"),
+            std::string::npos);
+  for (const double far : {1e300, 2e4, static_cast<double>(INFINITY)}) {
+    write_bytes(map_, resealed(good, kFirstPlaceXAt, &far, 8));
+    EXPECT_EQ(refusal(bytes_of(map_)), "") << "the header is whole";
+    EXPECT_NE(load_refusal({}).find("place 0 is damaged"), std::string::npos) << far;
+  }
+  write_bytes(map_, good);
   std::vector<uint8_t> newer = good;
   newer[8] = 2;
   EXPECT_NE(refusal(newer).find("format version 2; this build reads version 1"), std::string::npos);

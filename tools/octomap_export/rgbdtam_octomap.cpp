@@ -20,6 +20,10 @@ int main(int argc, char** argv) {
       s = Status::error(StatusCode::kInvalidArgument, "unknown argument %s", argv[i]);
     }
   }
+  if (s.is_ok() && !outputs_are_safe("rgbdtam-octomap", {{"<out.bt>", argv[2]}},
+                                     map_export_inputs(argv[1], options), {})) {
+    return 2;
+  }
   LoadedMap map;
   LevelFrame level;
   OctomapSummary summary;

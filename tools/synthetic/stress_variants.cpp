@@ -375,12 +375,24 @@ bool noise_list(const std::string& in, const std::string& out, const char* list,
 
 bool noise_sequence(const std::string& in, const std::string& out, const std::string& config,
                     const std::string& kind, unsigned seed) {
-  const bool depth = kind == "depth" || kind == "both";
-  const bool colour = kind == "colour" || kind == "both";
-  if (!depth && !colour) return fail("noise: the kind is depth, colour or both");
   Params p;
-  if (!load_params(config, &p) || !make_output(in, out) ||
-      !copy_file(in, out, "groundtruth.txt", true) || !copy_file(in, out, "calib.txt", false)) {
+  if (!load_params(config, &p)) return false;
+  const struct {
+    const char* kind;
+    double raw;
+  } kStuck[] = {
+      {"depth-1m", p.sensor.depth_factor}, {"depth-zero", 0.0}, {"depth-saturated", 65535.0}};
+  double stuck_raw = -1.0;
+  for (const auto& k : kStuck) {
+    if (kind == k.kind) stuck_raw = k.raw;
+  }
+  const bool depth = kind == "depth" || kind == "both" || stuck_raw >= 0.0;
+  const bool colour = kind == "colour" || kind == "both";
+  if (!depth && !colour) {
+    return fail("noise: the kind is depth, colour, both, depth-1m, depth-zero or depth-saturated");
+  }
+  if (!make_output(in, out) || !copy_file(in, out, "groundtruth.txt", true) ||
+      !copy_file(in, out, "calib.txt", false)) {
     return false;
   }
   const int w = p.camera.width_px, h = p.camera.height_px;
@@ -399,7 +411,8 @@ bool noise_sequence(const std::string& in, const std::string& out, const std::st
                   in, out, "depth.txt", "depth", w, h,
                   [&](std::vector<uint16_t>* px) {
                     for (uint16_t& v : *px) {
-                      v = static_cast<uint16_t>(std::lround(depth_m(rng) * p.sensor.depth_factor));
+                      v = static_cast<uint16_t>(std::lround(
+                          stuck_raw >= 0.0 ? stuck_raw : depth_m(rng) * p.sensor.depth_factor));
                     }
                   })
             : copy_file(in, out, "depth.txt", true) && link_into(in, out, "depth");

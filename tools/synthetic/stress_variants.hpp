@@ -24,7 +24,9 @@ bool blur_sequence(const std::string& in, const std::string& out, const std::str
                    double exposure_ms);
 // Pure noise in place of the depth images, the colour images or both (kind: depth, colour,
 // both), from a fixed seed; stamps and ground truth as recorded. Depth is uniform over the
-// sensor's range. config gives the image size, the depth scale and the range.
+// sensor's range. Or depth as a failed sensor gives it, one raw value in every pixel of every
+// frame: 1 m (depth-1m), 0 (depth-zero) or 65535 (depth-saturated). config gives the image
+// size, the depth scale and the range.
 bool noise_sequence(const std::string& in, const std::string& out, const std::string& config,
                     const std::string& kind, unsigned seed);
 // The sequence played forwards and then backwards: the reversed frames get new, increasing

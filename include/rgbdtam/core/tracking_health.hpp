@@ -47,6 +47,26 @@ enum HealthCheck : uint32_t {
   kTooFast = 1u << 5,           // faster than the physical limits
   kWeakDirection = 1u << 6,     // a direction the depth leaves free is not determined either
   kAmbiguous = 1u << 7,         // another pose within the camera's reach fits about as well
+  kDepthFrozen = 1u << 8,       // the sensor repeats its last depth frame (FrozenDepthCheck)
+};
+
+// A depth sensor's noise makes any two of its frames differ in many pixels. A new depth frame
+// (a new stamp) with the last one's content while the image has changed is a repeat; a stream
+// that repeats itself frame after frame has stopped (a stuck driver buffer, a failed sensor)
+// and whatever it shows, the geometry is not this frame's. One repeat alone is not enough: a
+// recording paired by nearest stamp gives a depth frame to two colour frames (7 times in
+// fr1_xyz's first 50), and one frame's lag is harmless. Sampled fingerprints; no copy.
+class FrozenDepthCheck {
+ public:
+  static constexpr int kFrozenAfterRepeats = 2;
+  // True when this frame's depth is the kFrozenAfterRepeats-th repeat in a row, or later.
+  bool frozen(const uint16_t* depth, int64_t depth_stamp_ns, const uint8_t* gray, int pixels);
+
+ private:
+  uint64_t depth_ = 0, gray_ = 0;
+  int64_t stamp_ns_ = 0;
+  bool has_previous_ = false;
+  int repeats_ = 0;
 };
 
 struct HealthContext {

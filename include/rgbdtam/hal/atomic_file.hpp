@@ -2,7 +2,8 @@
 // A map file written whole or not at all (MapFileTarget), through open/write with a buffer
 // allocated once at init: no stdio and no allocation per save, so the loop module's thread can
 // save while running. Each save goes to <path>.partial, is synced, renamed over path, and the
-// folder synced: a power cut at any instant leaves the old file or the new one.
+// folder synced: a power cut at any instant leaves the old file or the new one. A save that
+// fails removes its .partial file.
 
 #include <climits>
 #include <memory>

@@ -21,10 +21,15 @@ Status read_file(const char* path, uint8_t* buf, size_t capacity, size_t* size);
 // Init-time helper: reads a text file into a new NUL-terminated buffer of at most max_bytes.
 Status read_text_file(const char* path, size_t max_bytes, char** text);
 
+// For an output written at the end of a job, checked at its start: `path` is not a folder and
+// its folder takes a new file (the probe, <path>.partial, is removed again).
+Status check_can_create(const char* path);
+
 // An output file written as `<path>.partial` and renamed to `path` when complete, so that a
 // reader never finds half a file under the real name and an interrupted one is still there.
 // A path that exists and is not a regular file (a device, a FIFO) is written directly. The
-// first failure is kept, naming the file and the reason.
+// first failure is kept, naming the file and the reason; after it, commit() removes the
+// .partial file.
 class OutputFile {
  public:
   ~OutputFile();  // unfinished: closed and left as .partial

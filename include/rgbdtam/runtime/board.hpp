@@ -69,7 +69,7 @@ struct Board {
   double autopilot_attitude_sigma_rad = 0.5 * M_PI / 180.0;  // its noise over one frame
   bool link_time_in_autopilot_clock = false;  // time_usec in the autopilot's clock (TIMESYNC)
   // A fixed geographic origin sent as SET_GPS_GLOBAL_ORIGIN (NaN: none).
-  double origin_latitude_deg = NAN, origin_longitude_deg = NAN, origin_altitude_m = 0.0;
+  double origin_latitude_deg = NAN, origin_longitude_deg = NAN, origin_altitude_m = NAN;
 
   char gpio_chip[kTextBytes] = "";  // empty: no GPIO
   int gpio_led_line = -1;           // status LED, -1 = none

@@ -34,6 +34,7 @@ struct StageCounters {
   uint32_t lost = 0;
   uint32_t without_depth = 0;
   uint32_t depth_not_surface = 0;        // ... of which the sensor's depth was set aside as noise
+  uint32_t depth_frozen = 0;             // ... or repeated the last depth frame: lost
   uint32_t retried = 0;                  // frames whose first estimate failed a health check
   uint32_t recovered_by_guesses = 0;     // ... and passed from another initial guess
   uint32_t recovered_by_last_frame = 0;  // ... or against the last valid frame
@@ -90,7 +91,8 @@ class TrackingPipeline {
  private:
   // The stages of process(), in order.
   PoseEstimate begin_output(const SensorFrame& frame);
-  void prepare(const SensorFrame& frame, PoseEstimate* out);
+  // The sensor checks the frame failed (kDepthFrozen), 0 when none.
+  uint32_t prepare(const SensorFrame& frame, PoseEstimate* out);
   void start(const SensorFrame& frame, PoseEstimate* out);  // no keyframe yet
   void adopt_built_keyframe();
   void adopt_corrections();
@@ -106,6 +108,7 @@ class TrackingPipeline {
   Params params_;
   Undistorter undistorter_;
   FrameBuffers frames_;
+  FrozenDepthCheck frozen_depth_;
   MotionState motion_;
   MotionPriors priors_;
   PoseSearch search_;
