@@ -66,14 +66,19 @@ node tools/mavlink-check/page-check.mjs build/bin board/host-emulation build/mon
 build host-debug
 check host-debug -LE long
 # Raspberry Pi 4: static, Kinect v1; its whole suite under qemu through the HIL runner, but for
-# three allocation tests of minutes under emulation (natively seconds) and the scripted
-# autopilot, which plays attitudes in real time to frames that must be tracked in real time:
-# they run in the host suites, the other allocation tests under qemu, and everything on the
-# board itself.
+# three allocation tests and four end-to-end replays of half a minute or more under emulation
+# (natively seconds; the code they run is run under qemu by the other tests, such as
+# RealClip's and the map file's damage test), and two firmware tests that need frames tracked
+# in real time (the scripted autopilot's attitudes; the place store filling within a second):
+# they run in the host suites, and everything on the board itself.
 build aarch64-raspberry-pi-4
 tools/hil/run.py raspberry-pi-4 qemu: --skip '^(Allocations\.(NoneWithTheMapperAndLoopModule|'\
 'NoneWhileRecoveringFromAKidnappedFrame|NoneInTheFirmwareRuntimeInAMapSavedWhileRunningOrLocalisedIn)|'\
-'Firmware\.TheAutopilotsAttitudeLevelsTheOdometryFrameAndGuidesTheTracker)'
+'RobustTracking\.TheAutopilotsTurnIsTheFirstGuessAndAWrongOneIsRefused|'\
+'MapFile\.(ASecondSessionIsFoundInTheFirstOnesMapAndReportsPosesInItsWorld|'\
+'LocaliseModeKeepsTheMapsPlacesWhereTheyWere|AWriterKilledAtAnyInstantLeavesAMapThatLoads)|'\
+'Firmware\.(TheAutopilotsAttitudeLevelsTheOdometryFrameAndGuidesTheTracker|'\
+'ThePlaceStoreFillingIsReportedOnceAndCounted))'
 file build/aarch64-raspberry-pi-4/bin/rgbdtam | grep -q "ARM aarch64.*statically linked" \
   || { echo "the Raspberry Pi 4's rgbdtam is not a static ARM binary" >&2; exit 1; }
 # The runner's SSH transport, to an sshd on loopback that runs the binaries under qemu, beside

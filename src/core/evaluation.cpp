@@ -191,12 +191,20 @@ Coverage evaluate_coverage(const std::vector<double>& frame_stamps,
     const bool before = it != sorted.begin() && std::fabs(*(it - 1) - t) < 0.02;
     return after || before;
   };
-  for (double t : frame_stamps) {
+  // A frame is estimated when a pose lies within ATE's association window of it and nearer to
+  // it than to any other frame: one pose covers one frame, whatever its stamps' rounding.
+  std::vector<double> frames = frame_stamps;
+  std::sort(frames.begin(), frames.end());
+  for (size_t f = 0; f < frames.size(); ++f) {
+    const double t = frames[f];
     if (!has_near(gt_stamps, t)) continue;
     ++c.frames;
-    // The trajectory is stamped with the colour timestamps themselves.
-    auto it = std::lower_bound(est_stamps.begin(), est_stamps.end(), t - 1e-6);
-    if (it != est_stamps.end() && std::fabs(*it - t) < 1e-6) ++c.estimated;
+    if (est_stamps.empty()) continue;
+    const int e = find_closest_index(est_stamps, t);
+    if (std::fabs(est_stamps[e] - t) < 0.02 &&
+        find_closest_index(frames, est_stamps[e]) == static_cast<int>(f)) {
+      ++c.estimated;
+    }
   }
   return c;
 }

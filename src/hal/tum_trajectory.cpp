@@ -52,8 +52,14 @@ void parse_lines(char* text, int count, int* bad_lines, Take take) {
 void parse_tum_trajectory(char* text, std::vector<StampedPose>* out, int* bad_lines) {
   out->clear();
   parse_lines(text, 8, bad_lines, [&](const double* v) {
-    // evaluate_rpe.py skips zero quaternions as well.
-    if (Eigen::Quaterniond(v[7], v[4], v[5], v[6]).norm() < 1e-9) return false;
+    // evaluate_rpe.py skips zero quaternions as well. A quaternion far from unit length or a
+    // position beyond any map is a broken line, not a pose to normalise or average in.
+    constexpr double kMostQuaternionNormError = 0.01, kMostMetres = 1e6;
+    const double q_norm = Eigen::Quaterniond(v[7], v[4], v[5], v[6]).norm();
+    if (!(std::fabs(q_norm - 1.0) <= kMostQuaternionNormError)) return false;
+    for (int k = 1; k <= 3; ++k) {
+      if (!(std::fabs(v[k]) <= kMostMetres)) return false;
+    }
     out->push_back(
         {v[0], SE3(Eigen::Quaterniond(v[7], v[4], v[5], v[6]), Vector3d(v[1], v[2], v[3]))});
     return true;
@@ -91,6 +97,16 @@ Status read_tum_trajectory(const char* path, std::vector<StampedPose>* out, int*
   parse_tum_trajectory(text, out, bad_lines);
   delete[] text;
   if (out->empty()) return Status::error(StatusCode::kCorrupt, "%s: no poses", path);
+  // One instant, two poses: which one the association takes would decide the error.
+  for (size_t i = 1; i < out->size(); ++i) {
+    const StampedPose& a = (*out)[i - 1];
+    const StampedPose& b = (*out)[i];
+    if (a.stamp_s == b.stamp_s && (a.T_w_c.translation() != b.T_w_c.translation() ||
+                                   !a.T_w_c.quaternion().isApprox(b.T_w_c.quaternion(), 0.0))) {
+      return Status::error(StatusCode::kCorrupt,
+                           "%s: stamp %.6f is listed twice with different poses", path, a.stamp_s);
+    }
+  }
   return Status::ok();
 }
 

@@ -64,6 +64,50 @@ TEST(Cli, TheMemoryBudgetChecksTheBoardsOwnPoolSize) {
   EXPECT_NE(o.err.find("map.keyframe_pool 24 x"), std::string::npos) << o.err;
 }
 
+// Issue 35, items 20 and 21: eval refuses one stamp with two poses, skips (and counts) lines
+// that are no pose, and counts a frame as estimated when a pose lies within the association
+// window of it, as ATE associates.
+TEST(Cli, EvalTakesStampsAsATEDoesAndRefusesOrSkipsWhatIsNoTrajectory) {
+  const std::string dir = testing::make_temp_dir("cli_eval_inputs");
+  std::vector<std::string> stamps;
+  {
+    std::ifstream list(clip() + "/rgb.txt");
+    for (std::string line; std::getline(list, line);) {
+      if (!line.empty() && line[0] != '#') stamps.push_back(line.substr(0, line.find(' ')));
+    }
+  }
+  ASSERT_EQ(stamps.size(), 50u);
+  auto estimate = [&](double shift_s, const std::string& extra) {
+    std::string text;
+    for (const std::string& t : stamps) {
+      char line[96];
+      std::snprintf(line, sizeof(line), "%.6f 0 0 0 0 0 0 1\n", std::atof(t.c_str()) + shift_s);
+      text += line;
+    }
+    const std::string path = dir + "/est.txt";
+    EXPECT_TRUE(testing::write_text(path, text + extra));
+    return path;
+  };
+  const std::string gt = clip() + "/groundtruth.txt";
+  const std::string frames = " --frames " + clip() + "/rgb.txt";
+  for (const double shift_s : {0.0, 1e-6, 1e-3, 0.015}) {
+    const Outcome o = rgbdtam("eval " + gt + " " + estimate(shift_s, "") + frames);
+    EXPECT_EQ(o.exit_code, 0) << o.err;
+    EXPECT_NE(o.out.find("coverage: 100.0 %"), std::string::npos) << shift_s << "\n" << o.out;
+  }
+  Outcome o = rgbdtam("eval " + gt + " " + estimate(0, stamps[3] + " 0.5 0 0 0 0 0 1\n") + frames);
+  EXPECT_EQ(o.exit_code, 1);
+  EXPECT_NE(o.err.find("stamp " + stamps[3] + " is listed twice with different poses"),
+            std::string::npos)
+      << o.err;
+  o = rgbdtam("eval " + gt + " " +
+              estimate(0, "1305031200.0 0 0 0 0 0 0 1000\n1305031201.0 1e300 0 0 0 0 0 1\n") +
+              frames);
+  EXPECT_EQ(o.exit_code, 0) << o.err;
+  EXPECT_NE(o.err.find("skipped 2 unreadable lines"), std::string::npos) << o.err;
+  EXPECT_EQ(o.out.find("inf"), std::string::npos) << o.out;
+}
+
 TEST(Cli, EvalPlotsTheTrajectoryAsSvgAndNamesAPlotItCannotWrite) {
   const std::string dir = testing::make_temp_dir("cli_plot");
   const std::string gt = clip() + "/groundtruth.txt";

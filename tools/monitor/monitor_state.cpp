@@ -7,15 +7,42 @@
 
 namespace rgbdtam {
 
+namespace {
+// An ODOMETRY that claims a pose (quality 0-100; -1 is a failed one) must carry one: a finite
+// position and a unit quaternion. Anything else no receiver may fly on, whoever sent it.
+bool claims_a_usable_pose(const mavlink::Odometry& o) {
+  if (o.quality < 0 || o.quality > 100) return false;
+  double norm2 = 0;
+  for (const float v : o.q) {
+    if (!std::isfinite(v)) return false;
+    norm2 += static_cast<double>(v) * v;
+  }
+  for (const float v : {o.x, o.y, o.z}) {
+    if (!std::isfinite(v)) return false;
+  }
+  constexpr double kMostNormError = 0.01;
+  return std::fabs(std::sqrt(norm2) - 1.0) <= kMostNormError;
+}
+}  // namespace
+
 MonitorEvent MonitorState::on_frame(const mavlink::Frame& f, int64_t now_ns) {
   if (f.message_id == mavlink::kOdometry.id) {
-    mavlink::unpack(f.payload, f.length, &last);
+    mavlink::Odometry o;
+    mavlink::unpack(f.payload, f.length, &o);
     ++odometry;
     ++window_count_;
-    const bool ok = last.quality >= 0;
-    ++(ok ? valid : lost);
-    track.push_back({last.x, last.y, last.z, ok, last.reset_counter});
-    return ok ? MonitorEvent::kValidPose : MonitorEvent::kNone;
+    const bool failed = o.quality == -1;
+    // A pose older than the last valid one would make a saved trajectory go back in time.
+    const bool in_order = saved_until_usec_ == 0 || o.time_usec > saved_until_usec_;
+    if (!failed && (!claims_a_usable_pose(o) || !in_order)) {
+      ++malformed;  // counted, never drawn, shown or saved
+      return MonitorEvent::kNone;
+    }
+    last = o;
+    ++(failed ? lost : valid);
+    if (!failed) saved_until_usec_ = o.time_usec;
+    track.push_back({last.x, last.y, last.z, !failed, last.reset_counter});
+    return failed ? MonitorEvent::kNone : MonitorEvent::kValidPose;
   }
   if (f.message_id == mavlink::kHeartbeat.id) {
     mavlink::Heartbeat hb;
@@ -85,6 +112,7 @@ void MonitorState::write_json(std::FILE* out, size_t since) const {
       .integer("system_status", system_status)
       .integer("odometry", static_cast<long long>(odometry))
       .integer("valid", static_cast<long long>(valid))
+      .integer("malformed", static_cast<long long>(malformed))
       .integer("lost", static_cast<long long>(lost))
       .integer("heartbeats", static_cast<long long>(heartbeats))
       .integer("crc_errors", static_cast<long long>(link.crc_errors))

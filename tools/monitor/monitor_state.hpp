@@ -41,6 +41,9 @@ class MonitorState {
   void write_json(std::FILE* out, size_t since) const;
 
   uint64_t odometry = 0, valid = 0, lost = 0, heartbeats = 0, status_texts = 0;
+  // ODOMETRY claiming a pose it does not carry (not finite, no unit quaternion, quality beyond
+  // 100) or older than the last valid one: neither valid nor lost.
+  uint64_t malformed = 0;
   mavlink::Odometry last;
   uint8_t system_status = 0;
   double rate_hz = 0;
@@ -56,6 +59,7 @@ class MonitorState {
   int64_t start_ns_;
   int64_t window_start_ns_;
   uint64_t window_count_ = 0;
+  uint64_t saved_until_usec_ = 0;  // the newest valid pose's time_usec
   mavlink::StatusTextJoiner joiner_;
 };
 

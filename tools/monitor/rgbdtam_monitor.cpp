@@ -129,11 +129,11 @@ int monitor(int argc, char** argv) {
   }
   const mavlink::DecoderCounters& d = decoder.counters();
   std::printf(
-      "%sodometry %llu (valid %llu, lost %llu), heartbeats %llu, statustext %llu, crc "
-      "errors %llu, sequence gaps %llu, bytes skipped %llu\n",
+      "%sodometry %llu (valid %llu, lost %llu, malformed %llu), heartbeats %llu, statustext "
+      "%llu, crc errors %llu, sequence gaps %llu, bytes skipped %llu\n",
       quiet ? "" : "\n", static_cast<unsigned long long>(st.odometry),
       static_cast<unsigned long long>(st.valid), static_cast<unsigned long long>(st.lost),
-      static_cast<unsigned long long>(st.heartbeats),
+      static_cast<unsigned long long>(st.malformed), static_cast<unsigned long long>(st.heartbeats),
       static_cast<unsigned long long>(st.status_texts),
       static_cast<unsigned long long>(d.crc_errors), static_cast<unsigned long long>(d.lost_frames),
       static_cast<unsigned long long>(d.bytes_skipped));
