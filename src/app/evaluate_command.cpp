@@ -162,12 +162,11 @@ int evaluate_command(int argc, char** argv) {
                  "[--frames rgb.txt] [--plot out.svg] [--covariance estimate.cov]\n");
     return 2;
   }
-  auto given = [](const char* path) { return std::string(path != nullptr ? path : ""); };
-  if (!outputs_are_safe("rgbdtam eval", {{"--plot", given(plot_path)}},
+  if (!outputs_are_safe("rgbdtam eval", {{"--plot", given_path(plot_path)}},
                         {{"the ground truth", gt_path},
                          {"the estimate", est_path},
-                         {"--frames", given(frames_path)},
-                         {"--covariance", given(covariance_path)}},
+                         {"--frames", given_path(frames_path)},
+                         {"--covariance", given_path(covariance_path)}},
                         {})) {
     return 2;
   }

@@ -226,20 +226,19 @@ int replay_command(int argc, char** argv) {
     std::fprintf(stderr, "rgbdtam replay: %s\n", s.message());
     return 1;
   }
-  auto given = [](const char* path) { return std::string(path != nullptr ? path : ""); };
   std::vector<CommandFile> inputs = {
-      {"--config", given(c.config)},
+      {"--config", given_path(c.config)},
       {"loop.vocabulary", options.params.loop.enabled ? options.params.loop.vocabulary : ""},
-      {"--map-in", given(options.map_in_path), "--map-out"}};
+      {"--map-in", given_path(options.map_in_path), "--map-out"}};
   std::vector<std::string> input_folders;
   add_sequence_inputs(options.sequence, &inputs, &input_folders);
   if (!outputs_are_safe("rgbdtam replay",
-                        {{"--trajectory", given(options.trajectory_path)},
-                         {"--final-trajectory", given(options.final_trajectory_path)},
-                         {"--covariance", given(options.covariance_path)},
-                         {"--map", given(map_path)},
-                         {"--map-out", given(options.map_out_path)},
-                         {"--trace", given(options.trace_path)}},
+                        {{"--trajectory", given_path(options.trajectory_path)},
+                         {"--final-trajectory", given_path(options.final_trajectory_path)},
+                         {"--covariance", given_path(options.covariance_path)},
+                         {"--map", given_path(map_path)},
+                         {"--map-out", given_path(options.map_out_path)},
+                         {"--trace", given_path(options.trace_path)}},
                         inputs, input_folders)) {
     return 2;
   }

@@ -15,6 +15,9 @@ struct CommandFile {
   std::string replaced_by = "";
 };
 
+// An optional argument's path as CommandFile takes it: empty when not given.
+inline std::string given_path(const char* path) { return path != nullptr ? path : ""; }
+
 // False after printing "<program>: ..." (e.g. "rgbdtam replay") on stderr when an output
 // clashes.
 bool outputs_are_safe(const char* command, const std::vector<CommandFile>& outputs,

@@ -5,12 +5,12 @@
 
 #include "config_files.hpp"
 #include "json_line.hpp"
-#include "loop_summary.hpp"
 #include "memory_budget.hpp"
 #include "rgbdtam/hal/atomic_file.hpp"
 #include "rgbdtam/hal/clock.hpp"
 #include "rgbdtam/hal/file.hpp"
 #include "rgbdtam/runtime/pose_link.hpp"
+#include "summary_lines.hpp"
 
 namespace rgbdtam {
 namespace {

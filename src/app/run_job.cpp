@@ -11,7 +11,6 @@
 #include <cerrno>
 
 #include "config_files.hpp"
-#include "loop_summary.hpp"
 #include "map_files.hpp"
 #include "memory_budget.hpp"
 #include "rgbdtam/core/assert.hpp"
@@ -20,6 +19,7 @@
 #include "rgbdtam/hal/serial_link.hpp"
 #include "rgbdtam/hal/udp_link.hpp"
 #include "rgbdtam/hal/usb_devices.hpp"
+#include "summary_lines.hpp"
 
 namespace rgbdtam {
 namespace {

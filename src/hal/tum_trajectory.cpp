@@ -101,8 +101,9 @@ Status read_tum_trajectory(const char* path, std::vector<StampedPose>* out, int*
   for (size_t i = 1; i < out->size(); ++i) {
     const StampedPose& a = (*out)[i - 1];
     const StampedPose& b = (*out)[i];
-    if (a.stamp_s == b.stamp_s && (a.T_w_c.translation() != b.T_w_c.translation() ||
-                                   !a.T_w_c.quaternion().isApprox(b.T_w_c.quaternion(), 0.0))) {
+    if (a.stamp_s == b.stamp_s &&
+        (a.T_w_c.translation() != b.T_w_c.translation() ||
+         a.T_w_c.quaternion().coeffs() != b.T_w_c.quaternion().coeffs())) {
       return Status::error(StatusCode::kCorrupt,
                            "%s: stamp %.6f is listed twice with different poses", path, a.stamp_s);
     }

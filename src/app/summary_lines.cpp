@@ -1,4 +1,4 @@
-#include "loop_summary.hpp"
+#include "summary_lines.hpp"
 
 #include <cstdio>
 
