@@ -158,9 +158,12 @@ int ClipCamera::ioctl(int fd, unsigned long request, void* arg) {
       return 0;
     case VIDIOC_DQBUF: {
       const int64_t now = monotonic_ns();
-      if (n->queued_count == 0 || due_ns(n->next_frame) > now) return fail(EAGAIN);
+      const bool due = driven_by_reader_ ? reader_holds_none(*n) : due_ns(n->next_frame) <= now;
+      if (n->queued_count == 0 || !due) return fail(EAGAIN);
       // A real camera overwrites what nobody took: the newest frame that is due.
-      const int64_t frame = std::max(n->next_frame, (now - start_ns_) / period_ns_);
+      const int64_t frame = driven_by_reader_
+                                ? n->next_frame
+                                : std::max(n->next_frame, (now - start_ns_) / period_ns_);
       n->next_frame = frame + 1;
       auto* b = static_cast<v4l2_buffer*>(arg);
       b->index = static_cast<uint32_t>(n->queued[0]);
@@ -195,6 +198,7 @@ int ClipCamera::poll(int fd, int timeout_ms) {
     Node* n = node(fd);
     if (n == nullptr) return fail(EBADF);
     if (unplugged(now)) return fail(ENODEV);
+    if (driven_by_reader_) return reader_holds_none(*n) ? 1 : 0;
     due = due_ns(n->next_frame);
   }
   if (due <= now) return 1;

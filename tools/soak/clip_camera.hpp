@@ -35,6 +35,10 @@ class ClipCamera : public V4l2Io {
   }
   // Before opening: the colour node sends these (one JPEG per clip frame) as MJPEG.
   void send_mjpeg(std::vector<std::vector<uint8_t>> jpeg);
+  // Before opening: the next frame is due once the reader has given back every buffer, so the
+  // reader drives the clock and sees every frame, however slow the machine (stamps stay fps
+  // apart).
+  void drive_by_reader() { driven_by_reader_ = true; }
 
   int open(const char* path, int flags) override;
   int close(int fd) override;
@@ -57,6 +61,7 @@ class ClipCamera : public V4l2Io {
     int queued_count = 0;
   };
   bool unplugged(int64_t now_ns);
+  static bool reader_holds_none(const Node& n) { return n.queued_count == kBuffers; }
   int64_t due_ns(int64_t frame) const;
   Node* node(int fd);
   // The frame's bytes into a buffer; how many.
@@ -73,6 +78,7 @@ class ClipCamera : public V4l2Io {
   std::atomic<uint64_t> played_{0};
   std::atomic<int> outages_started_{0};
   int last_outage_ = -1;
+  bool driven_by_reader_ = false;
   std::mutex mutex_;  // the sensor's thread and a reopen may call at once
 };
 
