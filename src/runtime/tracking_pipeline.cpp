@@ -93,7 +93,7 @@ uint32_t TrackingPipeline::prepare(const SensorFrame& frame, PoseEstimate* out) 
     depth_usable = c.valid > 0 && c.on_surface >= kMinSurfaceFraction * c.valid;
     if (c.valid > 0 && !depth_usable) ++counters_.depth_not_surface;
     if (frozen_depth_.frozen(frame.depth, frame.depth_timestamp_ns, frame.gray,
-                              frame.width_px * frame.height_px)) {
+                             frame.width_px * frame.height_px)) {
       failed |= kDepthFrozen;
       depth_usable = false;
       ++counters_.depth_frozen;
@@ -261,6 +261,7 @@ bool TrackingPipeline::relocalise(const SensorFrame& frame, PoseEstimate* out) {
                                                                dt, params_.health))) {
     return false;
   }
+  const int64_t last_valid_ns = motion_.last_tracked_ns();
   Keyframe* kf = keyframes_.find(found.place_id);
   Attempt a;
   if (kf != nullptr) {
@@ -294,7 +295,7 @@ bool TrackingPipeline::relocalise(const SensorFrame& frame, PoseEstimate* out) {
   }
   out->flags |= kRelocalised | kReset;
   keyframes_.joined();
-  motion_.jumped();
+  motion_.jumped(last_valid_ns);
   ++counters_.relocalised;
   return true;
 }

@@ -1,5 +1,7 @@
 #include "rgbdtam/runtime/tracking/motion_state.hpp"
 
+#include <algorithm>
+
 #include "rgbdtam/port/messages.hpp"
 #include "rgbdtam/runtime/params.hpp"
 
@@ -33,6 +35,7 @@ void MotionState::begin(const SE3& T_w_c, int64_t t_ns) {
   has_last_ = true;
   velocity_.setZero();
   has_velocity_ = false;
+  lost_since_ns_ = -1;  // a later loss restarts from this pose, not sooner
 }
 
 void MotionState::track(const SE3& T_w_c, int64_t t_ns, bool continuous) {
@@ -78,6 +81,15 @@ void MotionState::correct(const SE3& delta, double max_reported_jump_m,
   ++reset_counter_;
   ++counters_.loop_corrections;
   correction_flags_ |= kLoopCorrected | kReset;
+}
+
+void MotionState::jumped(int64_t last_valid_ns) {
+  // Nothing measured the motion across the jump: no pose within the consumers' differencing
+  // window of the last one before it, as after a restart.
+  if (last_valid_ns >= 0) {
+    withhold_until_ns_ = std::max(withhold_until_ns_, last_valid_ns + reset_after_lost_ns_);
+  }
+  ++reset_counter_;
 }
 
 uint32_t MotionState::take_correction_flags() {

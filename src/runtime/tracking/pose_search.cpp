@@ -34,9 +34,12 @@ uint32_t PoseSearch::failed_checks(const TrackResult& r, Keyframe* kf, const Fra
   uint32_t failed = failed_health_checks(r, context, health_);
 
   // From an uncertain guess (after a loss) the planes of a plain scene can fit another place
-  // too: the same test, along the direction the depth determines worst.
+  // too: the same test, along the direction the depth determines worst. So must a pose from the
+  // depth alone, the image not fitting it: a wall and a floor with a few small things on them
+  // look determined by their information, yet a start along the wall settles where it starts.
   const bool uncertain_guess = !motion.previous_valid();
-  if (failed == 0 && (r.depth_degenerate || uncertain_guess) &&
+  const bool depth_alone = r.terms == kGeometricTerm;
+  if (failed == 0 && (r.depth_degenerate || uncertain_guess || depth_alone) &&
       !unique_along_weak_direction(r, kf, frame, motion, t_ns)) {
     failed |= kWeakDirection;
   }

@@ -55,14 +55,16 @@ class MotionState {
   int64_t lost_for_ns(int64_t t_ns);
   // Tracking restarts at the last valid pose, as if it had been measured now.
   void restart(int64_t t_ns);
-  // The estimate jumped (relocalisation): poses before and after are not comparable.
-  void jumped() { ++reset_counter_; }
+  // The estimate jumped (relocalisation) from the last valid pose at last_valid_ns (-1: none):
+  // poses before and after are not comparable, and none is reported valid while a consumer
+  // could difference it with that one.
+  void jumped(int64_t last_valid_ns);
   // A loop correction moved the camera's world by delta (T_w'_w). A jump larger than the limits
   // withholds poses while consumers could difference them across it.
   void correct(const SE3& delta, double max_reported_jump_m, double max_reported_jump_rad);
   // The flags a correction since the last frame gives the next output (PoseFlags).
   uint32_t take_correction_flags();
-  // A tracked pose at t_ns is not reported valid: too soon after a large correction.
+  // A tracked pose at t_ns is not reported valid: too soon after a large correction or a jump.
   bool withheld(int64_t t_ns) const { return t_ns <= withhold_until_ns_; }
   // Whether this frame was valid: the next one's guess is certain or not.
   void end_frame(bool valid) { previous_valid_ = valid; }

@@ -1,0 +1,51 @@
+// The motion state's clocks, driven by frame stamps: when a jump withholds poses, and from when a
+// loss is counted.
+#include <gtest/gtest.h>
+
+#include "rgbdtam/runtime/tracking/motion_state.hpp"
+
+namespace rgbdtam {
+namespace {
+
+constexpr int64_t kMs = 1'000'000;
+constexpr int64_t kWindowNs = 500 * kMs;  // health.reset_after_lost_ms
+
+MotionState tracked_until(int64_t t_ns) {
+  MotionState m;
+  m.init(true, kWindowNs);
+  m.begin(SE3(), 0);
+  for (int64_t t = 33 * kMs; t <= t_ns; t += 33 * kMs) m.track(SE3(), t, true);
+  return m;
+}
+
+TEST(MotionState, ARelocalisationWithholdsPosesUntilTheWindowAfterTheLastValidOneHasPassed) {
+  MotionState m = tracked_until(990 * kMs);
+  const int64_t last_valid_ns = m.last_tracked_ns();
+  const uint32_t resets = m.reset_counter();
+  // Lost for two frames, then found somewhere the motion since was not measured.
+  m.begin(SE3(Eigen::Quaterniond::Identity(), Vector3d(0.6, 0.0, 0.0)), last_valid_ns + 100 * kMs);
+  m.jumped(last_valid_ns);
+  EXPECT_EQ(m.reset_counter(), resets + 1);
+  EXPECT_TRUE(m.withheld(last_valid_ns + 100 * kMs));
+  EXPECT_TRUE(m.withheld(last_valid_ns + kWindowNs)) << "a pose exactly a window later is compared";
+  EXPECT_FALSE(m.withheld(last_valid_ns + kWindowNs + 1));
+}
+
+TEST(MotionState, AJumpWithNoPoseBeforeItWithholdsNothing) {
+  MotionState m;
+  m.init(true, kWindowNs);
+  m.begin(SE3(), 100 * kMs);  // found in a loaded map: nothing was sent before
+  m.jumped(-1);
+  EXPECT_FALSE(m.withheld(100 * kMs));
+}
+
+TEST(MotionState, ALossAfterAPoseFoundWithoutTrackingIsCountedFromItsOwnFirstFrame) {
+  MotionState m = tracked_until(990 * kMs);
+  EXPECT_EQ(m.lost_for_ns(1023 * kMs), 0);  // lost from here ...
+  EXPECT_EQ(m.lost_for_ns(1056 * kMs), 33 * kMs);
+  m.begin(SE3(), 1089 * kMs);  // ... relocalised onto a new keyframe ...
+  EXPECT_EQ(m.lost_for_ns(1122 * kMs), 0) << "... and lost again: a new loss, not the old one";
+}
+
+}  // namespace
+}  // namespace rgbdtam
