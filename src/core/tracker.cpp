@@ -219,8 +219,8 @@ int weigh_rows(const float* __restrict residual, const float* __restrict inv_sig
 }  // namespace
 
 size_t Tracker::scratch_bytes(const PinholeIntrinsics& finest, const TrackerOptions& opt) {
-  // 18 float buffers and one of offsets, a slot per point (allocate()).
-  constexpr size_t kBuffers = 19;
+  // 20 float buffers and one of offsets, a slot per point (allocate()).
+  constexpr size_t kBuffers = 21;
   const int n = TrackPoints::round_up(std::max(1, KeyframeBuilder::most_points(finest, opt)),
                                       TrackPoints::kBlock);
   return kBuffers * sizeof(float) * static_cast<size_t>(n);
@@ -235,10 +235,11 @@ void Tracker::allocate(const Keyframe& model, const TrackerOptions& opt) {
   }
   n = TrackPoints::round_up(n, TrackPoints::kBlock);
   for (auto* buffer :
-       {&proj_u_, &proj_fraction_u_, &proj_fraction_v_, &proj_inverse_z_, &ph_sample_,
-        &ph_residual_, &geo_residual_, &geo_inverse_sigma_, &corners_[0], &corners_[1],
-        &corners_[2], &corners_[3], &row_weight_[0], &row_weight_[1], &row_residual_[0],
-        &row_residual_[1], &point_cost_, &scratch_}) {
+       {&proj_u_,        &proj_fraction_u_, &proj_fraction_v_,    &proj_inverse_z_,
+        &ph_sample_,     &ph_residual_,     &geo_residual_,       &geo_inverse_sigma_,
+        &corners_[0],    &corners_[1],      &corners_[2],         &corners_[3],
+        &row_weight_[0], &row_weight_[1],   &row_residual_[0],    &row_residual_[1],
+        &point_cost_,    &scratch_,         &first_pose_cost_[0], &first_pose_cost_[1]}) {
     buffer->reset(new float[static_cast<size_t>(n)]());
   }
   proj_offset_.reset(new int32_t[static_cast<size_t>(n)]());
@@ -554,6 +555,42 @@ void Tracker::profile(const Keyframe& kf, const FramePyramid& frame, const SE3& 
     if (valid_fraction != nullptr)
       valid_fraction[i] = c.total > 0 ? double(c.valid) / c.total : 0.0;
   }
+}
+
+void Tracker::fit_on_common_points(const Keyframe& kf, const FramePyramid& frame, const SE3& T_k_a,
+                                   const SE3& T_k_b, int level, const ReferenceScales& reference,
+                                   uint8_t terms, double* cost_a, double* cost_b) {
+  terms_ = terms;
+  const TrackPoints* sets[2] = {&photometric_points(kf, level),
+                                &geometric_points(kf, frame, level)};
+  const double weights[2] = {1.0, opt_.geometric_weight};
+  double sum[2] = {0.0, 0.0}, weight = 0.0;
+  for (int pose = 0; pose < 2; ++pose) {
+    if (reference.photometric[level] > 0.f) ph_sigma_ = reference.photometric[level];
+    geo_scale_ = 1.f;
+    gain_ = 1.f;
+    brightness_ = 0.f;
+    (void)evaluate_level(kf, frame, level, (pose == 0 ? T_k_a : T_k_b).inverse(), false);
+    for (int term = 0; term < 2; ++term) {
+      const TrackPoints& pts = *sets[term];
+      (void)weigh(pts, term == 1);
+      float* first = first_pose_cost_[term].get();
+      for (int i = 0; i < pts.size(); ++i) {
+        const bool has_residual =
+            term == 0 ? ph_sample_[i] != kInvalid : geo_inverse_sigma_[i] != 0.f;
+        if (pose == 0) {
+          first[i] = has_residual ? point_cost_[i] : std::numeric_limits<float>::quiet_NaN();
+        } else if (has_residual && !std::isnan(first[i])) {
+          sum[0] += weights[term] * first[i];
+          sum[1] += weights[term] * point_cost_[i];
+          weight += weights[term];
+        }
+      }
+    }
+  }
+  const double none = std::numeric_limits<double>::infinity();
+  *cost_a = weight > 0.0 ? sum[0] / weight : none;
+  *cost_b = weight > 0.0 ? sum[1] / weight : none;
 }
 
 namespace {

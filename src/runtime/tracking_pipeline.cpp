@@ -156,10 +156,14 @@ Attempt TrackingPipeline::estimate(int64_t t_ns) {
   if (a.failed == 0) return a;
   ++counters_.retried;
   const uint32_t first_failure = a.failed;
-  a = search_.from_guesses(reference, frame, motion_, priors_, t_ns);
-  if (a.failed == 0) {
-    ++counters_.recovered_by_guesses;
-    return a;
+  // Two minima within reach that fit the reference about as well: a wider search against it
+  // can add minima, not remove those. The last valid frame, a second reference, may tell.
+  if ((a.failed & kAmbiguous) == 0) {
+    a = search_.from_guesses(reference, frame, motion_, priors_, t_ns);
+    if (a.failed == 0) {
+      ++counters_.recovered_by_guesses;
+      return a;
+    }
   }
   Keyframe* last = keyframes_.from_last_valid_frame(frames_, motion_.T_w_last(), motion_.last_ns());
   if (last != nullptr) {

@@ -82,7 +82,11 @@ TEST(ClipVariants, TheClipWanderedOverIsNeverFalseValid) {
                                        dir + "/wander", config, 120, 1));
   const auto out = testing::replay_and_evaluate(dir + "/wander", config);
   EXPECT_EQ(out.counters.frames, 120u);
-  testing::expect_tracked_or_lost(out, "the clip wandered over", 0.95);
+  // A relocalisation within 0.5 s of the last valid pose (a short outage) is tracked, but its
+  // poses are withheld until 0.5 s after that pose: 95 % of the other frames have a pose.
+  EXPECT_LE(out.counters.withheld, 15u) << "no more than one window's frames";
+  const double withheld = static_cast<double>(out.counters.withheld) / out.counters.frames;
+  testing::expect_tracked_or_lost(out, "the clip wandered over", 0.95 - withheld);
 }
 
 }  // namespace

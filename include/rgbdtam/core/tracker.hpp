@@ -195,6 +195,13 @@ class Tracker {
   // The visible fraction of the keyframe's points at a pose, without optimising: cheap enough
   // to rank several keyframes.
   double visible_at(const Keyframe& kf, const FramePyramid& frame, const SE3& T_k_c);
+  // Two poses compared on the same evidence: the mean robust cost, at each, of the keyframe's
+  // points at `level` that have a residual at both, at the reference scales, without optimising
+  // (infinite when none has). A mean over each pose's own points in view favours the pose that
+  // sees less of the keyframe, its best-fitting part.
+  void fit_on_common_points(const Keyframe& kf, const FramePyramid& frame, const SE3& T_k_a,
+                            const SE3& T_k_b, int level, const ReferenceScales& reference,
+                            uint8_t terms, double* cost_a, double* cost_b);
 
  private:
   struct LevelCost {
@@ -254,6 +261,8 @@ class Tracker {
   // The normal equations' rows of each term at the last measured evaluation, and the costs.
   std::unique_ptr<float[]> row_weight_[2], row_residual_[2], point_cost_;
   std::unique_ptr<float[]> scratch_;  // medians
+  // fit_on_common_points: each term's point costs at the first pose, NaN without a residual.
+  std::unique_ptr<float[]> first_pose_cost_[2];
   float gain_ = 1.f, brightness_ = 0.f, ph_sigma_ = 0.05f;
   float geo_scale_ = 1.f;      // geometric spread in sensor-model standard deviations
   uint8_t terms_ = kAllTerms;  // of the current track

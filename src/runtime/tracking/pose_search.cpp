@@ -141,7 +141,6 @@ void PoseSearch::resolve_within_reach(Attempt* a, const FramePyramid& frame,
   for (float& s : scales.photometric) s = kProbeSigma;
   Attempt best = *a;
   double best_cost = fit(kf, frame, a->r.T_k_c, 0, scales, a->r.terms);
-  double runner_up = std::numeric_limits<double>::infinity();
   SE3 seen[kMaxCandidates + 1] = {a->r.T_k_c};
   int distinct = 1;
   const int refined = from_aliases + std::min(probed, kMaxRefined);
@@ -157,14 +156,22 @@ void PoseSearch::resolve_within_reach(Attempt* a, const FramePyramid& frame,
     seen[distinct++] = b.r.T_k_c;
     const double cost = fit(kf, frame, b.r.T_k_c, 0, scales, a->r.terms);
     if (cost < best_cost) {
-      runner_up = best_cost;
       best = b;
       best_cost = cost;
-    } else {
-      runner_up = std::min(runner_up, cost);
     }
   }
-  if (probed > kMaxRefined || runner_up < kAmbiguityRatio * best_cost) {
+  // Every other minimum is compared with the best on the points both see: by the mean over each
+  // one's own points in view, a pose seeing only the best-fitting part of the keyframe would win.
+  bool ambiguous = probed > kMaxRefined;
+  for (int k = 0; k < distinct && !ambiguous; ++k) {
+    if (same_pose(seen[k], best.r.T_k_c)) continue;
+    double best_common = 0.0, other_common = 0.0;
+    tracker_.fit_on_common_points(kf, frame, best.r.T_k_c, seen[k], 0, scales, a->r.terms,
+                                  &best_common, &other_common);
+    // Nothing seen by both: nothing says which is right.
+    ambiguous = !std::isfinite(best_common) || other_common < kAmbiguityRatio * best_common;
+  }
+  if (ambiguous) {
     a->failed |= kAmbiguous;
     ++counters_.ambiguous;
     return;
