@@ -20,6 +20,7 @@
 #include "output_guard.hpp"
 #include "record_job.hpp"
 #include "replay_job.hpp"
+#include "rgbdtam/hal/fakenect_dump.hpp"
 #include "rgbdtam/hal/file.hpp"
 #include "rgbdtam/hal/ply_map_writer.hpp"
 #include "run_job.hpp"
@@ -404,6 +405,13 @@ Status check_device_is_there(const Board& board) {
     return Status::error(StatusCode::kInvalidArgument,
                          "sensor.device %s: not a folder (a %s sensor reads a recorded folder)",
                          device, board.sensor_kind);
+  }
+  // fakenect would end the process on a damaged dump: every entry is checked (run does too).
+  if (std::strcmp(board.sensor_kind, "fakenect") == 0) {
+    const Status dump = check_fakenect_dump(device);
+    if (!dump.is_ok()) {
+      return Status::error(dump.code(), "sensor.device: %s", dump.message());
+    }
   }
   return Status::ok();
 }

@@ -15,6 +15,7 @@
 #include "memory_budget.hpp"
 #include "rgbdtam/core/assert.hpp"
 #include "rgbdtam/hal/clock.hpp"
+#include "rgbdtam/hal/fakenect_dump.hpp"
 #include "rgbdtam/hal/file.hpp"
 #include "rgbdtam/hal/serial_link.hpp"
 #include "rgbdtam/hal/udp_link.hpp"
@@ -114,16 +115,11 @@ Status open_freenect(const Board& board, BoardSensor* sensor) {
 #if RGBDTAM_WITH_FAKENECT
 Status open_fakenect(const Board& board, BoardSensor* sensor) {
   // fakenect finds its dump through the environment, plays raw disparity only, plays it once
-  // per process, and exits the process when it cannot open the index: checked here first.
-  char index[kTextBytes + 16];
-  std::snprintf(index, sizeof(index), "%s/INDEX.txt", board.sensor_device);
-  std::FILE* file = std::fopen(index, "rb");
-  if (file == nullptr) {
-    return Status::error(StatusCode::kNotFound,
-                         "board '%s': sensor.device '%s' is not a fakenect dump (no INDEX.txt)",
-                         board.name, board.sensor_device);
+  // per process, and exits the process on a file it cannot read: checked here first.
+  const Status dump = check_fakenect_dump(board.sensor_device);
+  if (!dump.is_ok()) {
+    return Status::error(dump.code(), "board '%s': sensor.device: %s", board.name, dump.message());
   }
-  std::fclose(file);
   setenv("FAKENECT_PATH", board.sensor_device, 1);
   RGBDTAM_RETURN_IF_ERROR(
       sensor->freenect.open(kFakenectDriver, 0, FreenectDepth::kRaw, UINT32_MAX / 2));

@@ -135,6 +135,23 @@ TEST(Cli, AFakenectFolderWithoutADumpIsAClearError) {
   EXPECT_EQ(o.exit_code, 1);
   EXPECT_NE(o.err.find("is not a fakenect dump (no INDEX.txt)"), std::string::npos) << o.err;
 }
+
+TEST(Cli, ADamagedFakenectDumpIsNamedByCheckAndRunInsteadOfEndingTheProcess) {
+  // fakenect prints its own line and exits on an entry naming a missing file.
+  const std::string dump = testing::make_temp_dir("cli_fakenect_damaged");
+  ASSERT_TRUE(testing::write_text(dump + "/INDEX.txt", "d-1.000000-1000-.pgm\n"));
+  const std::string board = "--board " + testing::source_path("board/raspberry-pi-4") +
+                            " --board-set sensor.kind=fakenect --board-set sensor.usb_id=" +
+                            " --board-set sensor.device=" + dump;
+  const std::string says = "INDEX.txt line 1: " + dump + "/d-1.000000-1000-.pgm is not a file";
+  Outcome o = rgbdtam("run " + board + " --max-frames 1 --quiet");
+  EXPECT_EQ(o.exit_code, 1);
+  EXPECT_NE(o.err.find(says), std::string::npos) << o.err;
+  EXPECT_EQ(o.out.find("Error: Cannot open file"), std::string::npos) << "fakenect never ran";
+  o = rgbdtam("check " + board);
+  EXPECT_EQ(o.exit_code, 1);
+  EXPECT_NE(o.err.find(says), std::string::npos) << o.err;
+}
 #endif
 
 #if !RGBDTAM_WITH_OPENNI2

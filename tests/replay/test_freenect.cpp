@@ -5,10 +5,12 @@
 // (sensor.kind fakenect); the dynamic build runs with LD_LIBRARY_PATH at Debian's fakenect, which
 // then is its libfreenect (CMake sets it).
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <iterator>
 #include <memory>
 #include <string>
 #include <vector>
@@ -16,6 +18,7 @@
 #include "fake_usb.hpp"
 #include "firmware_monitor.hpp"
 #include "record_job.hpp"
+#include "rgbdtam/hal/fakenect_dump.hpp"
 #include "rgbdtam/hal/file.hpp"
 #include "rgbdtam/hal/freenect_source.hpp"
 #include "rgbdtam/hal/tum_replay_source.hpp"
@@ -116,6 +119,47 @@ TEST(Freenect, FakenectDumpFramesValuesAndTimestampsArriveExactly) {
     EXPECT_EQ(depth_mismatch, 0) << "frame " << f;
     EXPECT_EQ(out.depth[f], 0) << "2047 is no data";
   }
+}
+
+// Each way a dump can be damaged is an error naming its INDEX line, before fakenect (which would
+// end the process, echo the line's bytes or read past a short frame) is handed it.
+TEST(Freenect, ADamagedDumpIsAnErrorNamingTheLineBeforeFakenectPlaysIt) {
+  const std::string dir = testing::make_temp_dir("fakenect_damaged");
+  std::vector<DumpFrame> frames(1);
+  frames[0].gray.assign(kW * kH, 128);
+  frames[0].raw.assign(kW * kH, 600);
+  frames[0].depth_ticks = 1000;
+  frames[0].video_ticks = 1300;
+  write_dump(dir, frames);
+  ASSERT_TRUE(check_fakenect_dump(dir.c_str()).is_ok());
+  std::ifstream in(dir + "/INDEX.txt");
+  const std::string index((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string depth_name = index.substr(0, index.find('\n'));
+  auto expect_refused = [&](const std::string& what, const std::string& says) {
+    const Status s = check_fakenect_dump(dir.c_str());
+    EXPECT_FALSE(s.is_ok()) << what;
+    EXPECT_NE(std::string(s.message()).find(says), std::string::npos)
+        << what << ": " << s.message();
+    for (const char* c = s.message(); *c != '\0'; ++c) {
+      EXPECT_TRUE(*c >= 0x20 && *c < 0x7f) << what << ": a raw byte in the message";
+    }
+  };
+  ASSERT_TRUE(testing::write_text(dir + "/INDEX.txt", index + "d-2.0-5000-.pgm\n"));
+  expect_refused("a line naming a missing file",
+                 "line 3: " + dir + "/d-2.0-5000-.pgm is not a file");
+  ASSERT_TRUE(testing::write_text(dir + "/INDEX.txt", std::string("\x1b[2J\x01garbage\n") + index));
+  expect_refused("garbage", "line 1 is not a fakenect entry");
+  ASSERT_TRUE(testing::write_text(dir + "/INDEX.txt", ""));
+  expect_refused("an empty index", "lists no frames");
+  ASSERT_TRUE(testing::write_text(dir + "/INDEX.txt", index));
+  ASSERT_TRUE(write_binary(dir + "/" + depth_name, ""));
+  expect_refused("an empty frame", "no PNM header line");
+  ASSERT_TRUE(write_binary(dir + "/" + depth_name, "P5 640 480 65535\n" + std::string(100, 'x')));
+  expect_refused("a short frame", "holds 100 bytes of a 614400-byte depth frame");
+  ASSERT_EQ(std::remove((dir + "/" + depth_name).c_str()), 0);
+  ASSERT_EQ(::mkdir((dir + "/" + depth_name).c_str(), 0755), 0);
+  expect_refused("a folder in a frame's place",
+                 "line 1: " + dir + "/" + depth_name + " is not a file");
 }
 
 TEST(Freenect, AReopenedDeviceDeliversFramesAgain) {
