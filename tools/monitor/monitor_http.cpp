@@ -64,7 +64,8 @@ MHD_Result on_request(void* context, MHD_Connection* connection, const char* url
 
 }  // namespace
 
-Status MonitorHttp::start(const char* address, const MonitorState* state, std::mutex* lock) {
+Status MonitorHttp::start(const char* address, const MonitorState* state, std::mutex* lock,
+                          const HttpLimits& limits) {
   char ip[64];
   if (!split_endpoint(address, ip, sizeof(ip), &port_)) {
     return Status::error(StatusCode::kInvalidArgument, "--http '%s' is not ip:port", address);
@@ -78,9 +79,13 @@ Status MonitorHttp::start(const char* address, const MonitorState* state, std::m
   }
   state_ = state;
   lock_ = lock;
+  // poll or epoll, not select: select cannot watch a descriptor numbered past FD_SETSIZE (1024),
+  // and libmicrohttpd then resets every new connection.
   daemon_ =
-      MHD_start_daemon(MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_ERROR_LOG, port_, nullptr, nullptr,
-                       &on_request, this, MHD_OPTION_SOCK_ADDR, &where, MHD_OPTION_END);
+      MHD_start_daemon(MHD_USE_AUTO_INTERNAL_THREAD | MHD_USE_ERROR_LOG, port_, nullptr, nullptr,
+                       &on_request, this, MHD_OPTION_SOCK_ADDR, &where, MHD_OPTION_CONNECTION_LIMIT,
+                       limits.connections, MHD_OPTION_PER_IP_CONNECTION_LIMIT, limits.per_client,
+                       MHD_OPTION_CONNECTION_TIMEOUT, limits.idle_s, MHD_OPTION_END);
   if (daemon_ == nullptr) {
     return Status::error(StatusCode::kIoError, "--http %s: cannot listen there (in use?)", address);
   }
