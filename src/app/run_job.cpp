@@ -346,8 +346,10 @@ void print_peer(const PeerState& p) {
       "heartbeats, silent %u times%s\n",
       p.system_id, p.component_id, p.autopilot, autopilot_name(p.autopilot), p.type, p.heartbeats,
       p.silences, p.silent ? " (silent at the end)" : "");
-  std::printf("timesync: %u of its requests answered; %u answers to ours (%u clock jumps)",
-              p.timesync_answered, p.timesync_replies, p.clock_jumps);
+  std::printf(
+      "timesync: %u of its requests answered; %u answers to ours used, %u too slow to use (%u "
+      "clock jumps)",
+      p.timesync_answered, p.timesync_replies, p.timesync_delayed, p.clock_jumps);
   if (p.clock_known) {
     std::printf(", its clock %+.3f ms from our time_usec, best round trip %.3f ms",
                 static_cast<double>(p.clock_offset_ns) * 1e-6,

@@ -27,6 +27,7 @@ void PoseLink::set_time_base(int64_t sensor_ns, int64_t arrival_ns) {
   if (time_base_set_ && std::llabs(base - sensor_minus_now_ns_) > kClockJumpNs) {
     peer_.clock_known = false;
     peer_.best_round_trip_ns = -1;
+    round_trip_count_ = 0;
     timesync_sent_ns_ = -1;
   }
   sensor_minus_now_ns_ = base;
@@ -317,10 +318,16 @@ void PoseLink::on_timesync(const mavlink::Frame& f, int64_t now_ns) {
 }
 
 void PoseLink::on_clock_offset(int64_t offset_ns, int64_t round_trip_ns) {
-  if (peer_.best_round_trip_ns < 0 || round_trip_ns < peer_.best_round_trip_ns) {
-    peer_.best_round_trip_ns = round_trip_ns;
+  // The shortest recent round trip: one lucky answer must not set the bar for the whole run (on
+  // a loaded host the path stays slower, and its answers are what there is).
+  round_trips_[round_trip_next_] = round_trip_ns;
+  round_trip_next_ = (round_trip_next_ + 1) % kRoundTrips;
+  round_trip_count_ = std::min(round_trip_count_ + 1, kRoundTrips);
+  peer_.best_round_trip_ns = *std::min_element(round_trips_, round_trips_ + round_trip_count_);
+  if (round_trip_ns > 2 * peer_.best_round_trip_ns) {  // delayed: its offset is not
+    ++peer_.timesync_delayed;
+    return;
   }
-  if (round_trip_ns > 2 * peer_.best_round_trip_ns) return;  // delayed: its offset is not
   // An autopilot that rebooted restarts its clock: smoothing towards it would stamp its
   // attitudes wrongly for tens of seconds, so a jump is taken at once.
   const bool jumped =

@@ -310,6 +310,47 @@ TEST(PoseLink, AClockThatDriftsIsSmoothedOneThatJumpsIsTakenAtOnce) {
   EXPECT_EQ(peer.timesync_replies, 3u);
 }
 
+// Its answer to our latest TIMESYNC, round_trip_ns after we sent it, from a clock ahead_ns ahead.
+void answer_after(AutopilotLink* wire, PoseLink* link, int64_t round_trip_ns, int64_t ahead_ns) {
+  mavlink::Timesync reply;
+  reply.ts1 = wire->sent.timesync.back().ts1;
+  reply.tc1 = reply.ts1 + round_trip_ns / 2 + ahead_ns;
+  wire->says(reply);
+  link->tick(reply.ts1 - kSensorAhead + round_trip_ns, mavlink::kMavStateActive);
+}
+
+TEST(PoseLink, ASlowerPathBecomesTheNormAndEveryJumpOfTheClockIsCounted) {
+  AutopilotLink wire;
+  PoseLink link;
+  link.init(PoseLinkConfig{}, &wire);
+  start_clocks(&link);
+  hear_and_sync(&wire, &link, 2'000'000'000);  // one quick answer: 2 ms
+  const PeerState& peer = link.peer();
+  // The host is loaded from now on: every answer takes 20 ms, and the autopilot's clock is 3 ms
+  // further ahead. Once the quick answer is older than the last 8, the slower path is the norm.
+  int64_t now_ns = 2'000'000'000;
+  for (int i = 0; i < 10; ++i) {
+    now_ns += 1'100'000'000;
+    wire.says(mavlink::Heartbeat{});
+    link.tick(now_ns, mavlink::kMavStateActive);
+    answer_after(&wire, &link, 20'000'000, kAutopilotAhead + 3'000'000);
+  }
+  EXPECT_EQ(peer.timesync_delayed, 7u) << "while the 2 ms answer is among the last 8";
+  EXPECT_EQ(peer.timesync_replies, 1u + 3u);
+  EXPECT_EQ(peer.best_round_trip_ns, 20'000'000);
+  EXPECT_GT(peer.clock_offset_ns, kAutopilotAhead + 1'000'000) << "following the slower answers";
+  // Its clock set back and forth by 5 s at every answer: each is a jump, taken and counted.
+  for (int i = 0; i < 6; ++i) {
+    now_ns += 1'100'000'000;
+    wire.says(mavlink::Heartbeat{});
+    link.tick(now_ns, mavlink::kMavStateActive);
+    const int64_t set = i % 2 == 0 ? 5'000'000'000 : 0;
+    answer_after(&wire, &link, 20'000'000, kAutopilotAhead + set);
+    EXPECT_EQ(peer.clock_offset_ns, kAutopilotAhead + set) << "answer " << i;
+  }
+  EXPECT_EQ(peer.clock_jumps, 6u);
+}
+
 TEST(PoseLink, TheAutopilotsAttitudeReachesTheTrackerInTheSensorsClockAndItsOriginIsSent) {
   AutopilotLink wire;
   PoseLinkConfig config;

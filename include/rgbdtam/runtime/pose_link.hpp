@@ -70,11 +70,13 @@ struct PeerState {
   uint32_t timesync_replies = 0;   // its answers to ours
   uint32_t clock_jumps = 0;        // answers that moved its clock more than a second (a reboot)
   // Its clock minus the clock of our ODOMETRY time_usec, ns, from round trips no longer than
-  // twice the shortest seen; valid once an answer was taken (again after our clock jumped).
+  // twice the shortest of the last PoseLink::kRoundTrips (a busier path becomes the norm);
+  // valid once an answer was taken (again after our clock jumped).
   bool clock_known = false;
   int64_t clock_offset_ns = 0;
   int64_t best_round_trip_ns = -1;
-  uint64_t frames = 0;  // good frames received
+  uint32_t timesync_delayed = 0;  // answers not used: their round trip was too long
+  uint64_t frames = 0;            // good frames received
 };
 
 // The receiving side's inverse of PoseLink's frames: the camera pose T_w_c (world = the first
@@ -144,6 +146,10 @@ class PoseLink {
   PeerState peer_;
   int64_t sensor_minus_now_ns_ = 0;
   bool time_base_set_ = false;
+  // The last round trips, newest at round_trip_next_ - 1.
+  static constexpr int kRoundTrips = 8;
+  int64_t round_trips_[kRoundTrips] = {};
+  int round_trip_count_ = 0, round_trip_next_ = 0;
   int64_t timesync_sent_ns_ = -1;  // now_ns of our pending request
   int64_t timesync_sent_ts1_ = 0;  // its ts1, in the sensor's clock
   int64_t last_heartbeat_ns_ = -1;
