@@ -361,9 +361,11 @@ void print_attitude(const FirmwareRuntime& runtime, const PoseLinkCounters& lc) 
   const AttitudeAidCounters& a = runtime.attitude().counters();
   const TrackingCounters& t = runtime.slam().tracking().counters();
   std::printf(
-      "attitude: %llu received (%llu before TIMESYNC, %llu dropped), %u kept, %u refused; "
+      "attitude: %llu from the autopilot (%llu handed to the tracker, %llu before TIMESYNC, "
+      "%llu dropped at its full queue), %u kept, %u refused; "
       "frame %s (%u levellings, reset_counter moved %u times); rotation prior on %u frames: "
       "%u stood, %u refused by the image",
+      static_cast<unsigned long long>(lc.attitudes + lc.attitudes_unsynced + lc.attitudes_dropped),
       static_cast<unsigned long long>(lc.attitudes),
       static_cast<unsigned long long>(lc.attitudes_unsynced),
       static_cast<unsigned long long>(lc.attitudes_dropped), a.samples, a.refused,

@@ -361,8 +361,10 @@ void PoseLink::on_attitude(const mavlink::AttitudeQuaternion& a) {
 }
 
 void PoseLink::listen(int64_t now_ns) {
-  // Bounded, so that a flood of bytes cannot keep the link from sending.
-  constexpr int kMaxReadsPerTick = 64;
+  // Bounded, so that an endless stream cannot keep the link from sending, but past what an
+  // autopilot's flood brings between ticks (10 000 datagrams a second is 333 at 30 Hz): read
+  // less than arrives and the backlog grows until its heartbeats arrive seconds late.
+  constexpr int kMaxReadsPerTick = 2048;
   uint8_t bytes[512];
   for (int i = 0; i < kMaxReadsPerTick; ++i) {
     const size_t n = link_->receive(bytes, sizeof(bytes));

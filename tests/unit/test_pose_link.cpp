@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <deque>
 #include <string>
 #include <vector>
 
@@ -194,22 +195,34 @@ class AutopilotLink : public ByteLink {
     sent.take(bytes, n);
     return true;
   }
+  // A byte stream (serial), or one message a datagram as over UDP.
+  explicit AutopilotLink(bool datagrams = false) : datagrams_(datagrams) {}
   size_t receive(uint8_t* bytes, size_t n) override {
-    const size_t k = std::min(n, inbox_.size());
-    std::copy(inbox_.begin(), inbox_.begin() + static_cast<long>(k), bytes);
+    size_t take = n;
+    if (datagrams_) {
+      if (datagram_sizes_.empty()) return 0;
+      take = datagram_sizes_.front();  // the rest of a datagram longer than n is lost, as in UDP
+      datagram_sizes_.pop_front();
+    }
+    const size_t k = std::min(take, inbox_.size());
+    std::copy(inbox_.begin(), inbox_.begin() + static_cast<long>(std::min(k, n)), bytes);
     inbox_.erase(inbox_.begin(), inbox_.begin() + static_cast<long>(k));
-    return k;
+    return std::min(k, n);
   }
   template <typename Message>
   void says(const Message& m) {
     uint8_t frame[mavlink::kMaxFrameBytes];
     const int n = autopilot_.encode(m, frame);
+    if (datagrams_) datagram_sizes_.push_back(static_cast<size_t>(n));
     inbox_.insert(inbox_.end(), frame, frame + n);
   }
+  size_t waiting() const { return datagrams_ ? datagram_sizes_.size() : inbox_.size(); }
   Received sent;
 
  private:
-  mavlink::Encoder autopilot_{1, 1};  // PX4's system 1, autopilot component
+  bool datagrams_;
+  std::deque<size_t> datagram_sizes_;  // of each waiting datagram, oldest first
+  mavlink::Encoder autopilot_{1, 1};   // PX4's system 1, autopilot component
   std::vector<uint8_t> inbox_;
 };
 
@@ -349,6 +362,37 @@ TEST(PoseLink, ASlowerPathBecomesTheNormAndEveryJumpOfTheClockIsCounted) {
     EXPECT_EQ(peer.clock_offset_ns, kAutopilotAhead + set) << "answer " << i;
   }
   EXPECT_EQ(peer.clock_jumps, 6u);
+}
+
+// An autopilot streaming 10 000 of its own valid messages a second over UDP, one a datagram,
+// while the link ticks at 30 Hz: every one is read and accounted for, and its heartbeat is heard.
+TEST(PoseLink, AFloodOfTheAutopilotsMessagesIsReadAndItsHeartbeatHeard) {
+  AutopilotLink wire(true);
+  PoseLink link;
+  link.init(PoseLinkConfig{}, &wire);
+  SpscRing<AttitudeSample> attitudes;
+  attitudes.allocate(64);
+  link.send_attitudes_to(&attitudes);
+  start_clocks(&link);
+  hear_and_sync(&wire, &link, 2'000'000'000);
+  constexpr int kTicks = 30 * 6, kPerTick = 10'000 / 30;
+  mavlink::AttitudeQuaternion a;
+  a.q[0] = 1.f;
+  for (int i = 0; i < kTicks; ++i) {
+    if (i % 30 == 0) wire.says(mavlink::Heartbeat{});
+    for (int k = 0; k < kPerTick; ++k) wire.says(a);
+    link.tick(2'010'000'000 + int64_t{i} * 33'333'333, mavlink::kMavStateActive);
+    while (attitudes.front() != nullptr) attitudes.pop();  // the tracker takes its samples
+  }
+  const PeerState& peer = link.peer();
+  const PoseLinkCounters& c = link.counters();
+  EXPECT_EQ(wire.waiting(), 0u) << "nothing left unread";
+  EXPECT_FALSE(peer.silent);
+  EXPECT_EQ(peer.silences, 0u);
+  EXPECT_EQ(peer.heartbeats, 1u + kTicks / 30);
+  EXPECT_EQ(c.attitudes + c.attitudes_unsynced + c.attitudes_dropped,
+            static_cast<uint64_t>(kTicks) * kPerTick)
+      << "each one handed on, early or dropped at the full queue: counted once";
 }
 
 TEST(PoseLink, TheAutopilotsAttitudeReachesTheTrackerInTheSensorsClockAndItsOriginIsSent) {
