@@ -44,7 +44,9 @@ void ObstacleSectorizer::measure(const uint16_t* depth, ObstacleSectors* out) co
     const uint16_t* row = depth + static_cast<size_t>(v) * camera_.width_px;
     for (int u = stride_ / 2; u < camera_.width_px; u += stride_) {
       const float z = row[u] * metres_per_unit_;
-      if (z < min_m_ || z > max_m_) continue;  // no depth (0), or outside the sensor's range
+      // No depth (0), or beyond the sensor's range. A reading nearer than its minimum is not
+      // to be trusted for distance, but something is there: an obstacle at the minimum.
+      if (z <= 0.f || z > max_m_) continue;
       const Eigen::Vector3f p =
           R_b_c_ * Eigen::Vector3f((u - cx) * z / fx, (v - cy) * z / fy, z) + t_b_c_;
       const int s =
@@ -53,7 +55,7 @@ void ObstacleSectorizer::measure(const uint16_t* depth, ObstacleSectors* out) co
       seen[s] = true;
       const float height = -p.z();
       if (height < lowest_m_ || height > highest_m_) continue;
-      nearest[s] = std::min(nearest[s], std::hypot(p.x(), p.y()));
+      nearest[s] = std::min(nearest[s], z < min_m_ ? min_m_ : std::hypot(p.x(), p.y()));
     }
   }
   out->increment_deg = increment;
@@ -70,5 +72,19 @@ void ObstacleSectorizer::measure(const uint16_t* depth, ObstacleSectors* out) co
     }
   }
 }
+
+void BlindedSectors::mark(double dt_s, ObstacleSectors* sectors) {
+  const double reach_cm = 100.0 * max_speed_m_s_ * std::max(0.0, dt_s);
+  for (int s = 0; s < ObstacleSectors::kCount; ++s) {
+    uint16_t& d = sectors->distance_cm[s];
+    const uint16_t last = last_cm_[s];
+    const bool was_near =
+        last != 0 && last != ObstacleSectors::kUnknown && last <= sectors->min_cm + reach_cm;
+    if (d == ObstacleSectors::kUnknown && was_near) d = sectors->min_cm;
+    last_cm_[s] = d;
+  }
+}
+
+void BlindedSectors::forget() { std::fill(last_cm_, last_cm_ + ObstacleSectors::kCount, 0); }
 
 }  // namespace rgbdtam

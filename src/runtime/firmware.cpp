@@ -42,6 +42,7 @@ Status FirmwareRuntime::init(const Params& params, const Board& board, ByteLink*
     options.fov_deg = board.obstacle_fov_deg;
     obstacles_.init(params_.camera, board.T_b_c, params_.sensor.depth_factor,
                     params_.sensor.depth_range, options);
+    blinded_.init(params_.health.max_speed_m_s);
     obstacle_period_ns_ = static_cast<int64_t>(1e9 / board.obstacle_rate_hz);
   }
   return Status::ok();
@@ -54,9 +55,12 @@ void FirmwareRuntime::report_obstacles(const SensorFrame& frame) {
   const bool due = stamp_ns - last_obstacles_ns_ + period_ns_ / 2 >= obstacle_period_ns_ ||
                    stamp_ns < last_obstacles_ns_;  // a recording started again
   if (obstacle_period_ns_ == 0 || frame.depth == nullptr || !due) return;
+  if (stamp_ns < last_obstacles_ns_) blinded_.forget();
+  const double dt_s = static_cast<double>(stamp_ns - last_obstacles_ns_) * 1e-9;
   last_obstacles_ns_ = stamp_ns;
   ObstacleSectors sectors;
   obstacles_.measure(frame.depth, &sectors);
+  blinded_.mark(dt_s, &sectors);
   if (link_.post_obstacles(sectors, stamp_ns)) ++counters_.obstacle_reports;
 }
 

@@ -119,6 +119,74 @@ TEST(ObstacleSectors, NothingInTheBandIsNoObstacleAndNoDepthIsUnknown) {
   for (const uint16_t d : out.distance_cm) EXPECT_EQ(d, ObstacleSectors::kUnknown);
 }
 
+// The wall closing in at 3 m/s, reported at 10 Hz: 1 m, 0.45 m, then nearer than the sensor's
+// 0.3 m minimum, where a structured-light sensor gives no depth at all. PX4 with CP_GO_NO_DATA
+// moves into a sector read as unknown: these read the minimum until depth returns.
+TEST(ObstacleSectors, AWallThatBlindsTheSensorReadsTheMinimumNotUnknown) {
+  const ObstacleSectorizer s = sectorizer(ObstacleOptions());
+  BlindedSectors blinded;
+  blinded.init(3.0);  // health.max_speed: 30 cm between reports
+  const std::vector<uint16_t> blind(static_cast<size_t>(kCamera.width_px) * kCamera.height_px, 0);
+  ObstacleSectors out, before;
+  for (const double d : {1.0, 0.45}) {
+    s.measure(render(Wall{d, 0.0}).data(), &out);
+    blinded.mark(0.1, &out);
+  }
+  before = out;
+  int blinded_sectors = 0;
+  for (int report = 0; report < 3; ++report) {
+    s.measure(blind.data(), &out);
+    blinded.mark(0.1, &out);
+    for (int i = 0; i < ObstacleSectors::kCount; ++i) {
+      const uint16_t last = before.distance_cm[i];
+      const bool near = last != ObstacleSectors::kUnknown && last <= out.min_cm + 30;
+      EXPECT_EQ(out.distance_cm[i], near ? out.min_cm : ObstacleSectors::kUnknown)
+          << "report " << report << ", sector " << i << ", last " << last;
+      blinded_sectors += report == 0 && near;
+    }
+  }
+  int seen = 0;
+  for (const uint16_t d : before.distance_cm) seen += d != ObstacleSectors::kUnknown;
+  // From the body's origin, 8 cm behind the camera, the wall spans the middle 52 degrees.
+  EXPECT_EQ(blinded_sectors, seen) << "every sector that saw the wall at 0.45 m";
+  EXPECT_GE(seen, ObstacleSectors::kCount * 3 / 4);
+  // Depth back: the wall's distance again.
+  s.measure(render(Wall{0.45, 0.0}).data(), &out);
+  blinded.mark(0.1, &out);
+  EXPECT_EQ(out.distance_cm[ObstacleSectors::kCount / 2], before.distance_cm[36]);
+}
+
+TEST(ObstacleSectors, NoDepthWithoutANearObstacleBeforeItIsUnknownAndAReadingBelowTheMinimumIsIt) {
+  const ObstacleSectorizer s = sectorizer(ObstacleOptions());
+  const std::vector<uint16_t> blind(static_cast<size_t>(kCamera.width_px) * kCamera.height_px, 0);
+  ObstacleSectors out;
+  // Blind from the first report: nothing says what is there.
+  BlindedSectors from_start;
+  from_start.init(3.0);
+  s.measure(blind.data(), &out);
+  from_start.mark(0.1, &out);
+  for (const uint16_t d : out.distance_cm) EXPECT_EQ(d, ObstacleSectors::kUnknown);
+  // Last seen 2 m away: no surface can have come within the minimum since (the view turned away,
+  // or opened onto nothing in range).
+  BlindedSectors far;
+  far.init(3.0);
+  s.measure(render(Wall{2.0, 0.0}).data(), &out);
+  far.mark(0.1, &out);
+  s.measure(blind.data(), &out);
+  far.mark(0.1, &out);
+  for (const uint16_t d : out.distance_cm) EXPECT_EQ(d, ObstacleSectors::kUnknown);
+  // A sensor that does read nearer than its minimum: an obstacle there, at the minimum. (The
+  // wall 12 cm before the camera, which sits 8 cm ahead of the body's origin, spans only the
+  // middle sectors as seen from that origin.)
+  s.measure(render(Wall{0.2, 0.0}).data(), &out);
+  int at_minimum = 0;
+  for (const uint16_t d : out.distance_cm) {
+    EXPECT_TRUE(d == out.min_cm || d == ObstacleSectors::kUnknown) << d;
+    at_minimum += d == out.min_cm;
+  }
+  EXPECT_GE(at_minimum, ObstacleSectors::kCount / 2);
+}
+
 TEST(ObstacleSectors, AConfiguredSpanIsCentredOnTheCamerasBearing) {
   ObstacleOptions wide;
   wide.fov_deg = 90.0;

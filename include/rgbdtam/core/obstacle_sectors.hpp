@@ -19,7 +19,8 @@ namespace rgbdtam {
 struct ObstacleSectors {
   static constexpr int kCount = 72;
   static constexpr uint16_t kUnknown = UINT16_MAX;  // no depth in the sector
-  // Nearest obstacle in cm; max_cm + 1 where depth was seen and none lay in the band.
+  // Nearest obstacle in cm; max_cm + 1 where depth was seen and none lay in the band; min_cm
+  // for a surface nearer than the sensor's minimum (a reading below it, or BlindedSectors).
   uint16_t distance_cm[kCount] = {};
   float increment_deg = 0;     // each sector's width
   float angle_offset_deg = 0;  // sector 0's centre, from forward, clockwise positive
@@ -31,6 +32,25 @@ struct ObstacleOptions {
   double lowest_m = -0.5, highest_m = 0.5;
   double fov_deg = 0;  // the sectors' span; 0: the camera's horizontal field of view
   int stride_px = 4;   // every stride-th pixel of every stride-th row
+};
+
+// A structured-light sensor sees nothing nearer than its minimum: a surface closer than that
+// blinds it, and the sectors it fills have no depth, as sectors with nothing in range have. The
+// two differ in what came before: an obstacle does not vanish between two reports, so a sector
+// whose nearest obstacle was last within reach of the minimum (the minimum plus how far the
+// camera can have moved since: health.max_speed times the time between the reports) and that
+// now has no depth is blinded, and reads min_cm ("practically touching") until it has depth
+// again. A sector without depth from the start, or last seen further, stays unknown.
+class BlindedSectors {
+ public:
+  void init(double max_speed_m_s) { max_speed_m_s_ = max_speed_m_s; }
+  // The report measured dt_s after the last one, marked where blinded; remembered for the next.
+  void mark(double dt_s, ObstacleSectors* sectors);
+  void forget();  // the next report starts without a past (a recording started again)
+
+ private:
+  double max_speed_m_s_ = 0.0;
+  uint16_t last_cm_[ObstacleSectors::kCount] = {};  // 0: no report yet
 };
 
 class ObstacleSectorizer {

@@ -90,6 +90,7 @@ class FirmwareRuntime {
   bool localising_ = false;     // a map was loaded and no pose has been found in it yet
   int64_t fault_until_ns_ = 0;  // the LED shows a fault for a while after a sensor error
   ObstacleSectorizer obstacles_;
+  BlindedSectors blinded_;
   int64_t obstacle_period_ns_ = 0;  // 0: not sent
   int64_t last_obstacles_ns_ = INT64_MIN / 2;
   bool started_ = false;
