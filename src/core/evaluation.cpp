@@ -8,6 +8,10 @@
 
 namespace rgbdtam {
 namespace {
+// TUM files carry stamps to the microsecond: intervals are compared to that, so that a pose
+// exactly a window (or a frame period) before another is in it whether its stamp came from a
+// file's text or from integer nanoseconds (at 10 Hz, 1000.2 - 1000.1 is 0.1 plus a rounding).
+constexpr double kStampResolutionS = 1e-6;
 std::vector<double> stamps_of(const std::vector<StampedPose>& t) {
   std::vector<double> s;
   s.reserve(t.size());
@@ -222,7 +226,7 @@ FalseValidResult evaluate_false_valid(const std::vector<StampedPose>& gt,
   };
   size_t j = 0;
   for (size_t i = 1; i < est.size(); ++i) {
-    while (j < i && est[i].stamp_s - est[j].stamp_s > limits.window_s) ++j;
+    while (j < i && est[i].stamp_s - est[j].stamp_s > limits.window_s + kStampResolutionS) ++j;
     if (j == i) continue;  // nothing in the window, as after a gap
     const int gi = gt_near(est[i].stamp_s), gj = gt_near(est[j].stamp_s);
     if (gi < 0 || gj < 0) continue;
@@ -267,7 +271,7 @@ NeesResult evaluate_frame_to_frame_nees(const std::vector<StampedPose>& gt,
   std::vector<double> nees;
   double sum_t = 0, sum_r = 0;
   for (size_t i = 1; i < est.size() && i < covariance.size(); ++i) {
-    if (est[i].stamp_s - est[i - 1].stamp_s > max_gap_s) continue;
+    if (est[i].stamp_s - est[i - 1].stamp_s > max_gap_s + kStampResolutionS) continue;
     SE3 gt_prev, gt_now;
     if (!interpolate_pose(gt, est[i - 1].stamp_s, max_gt_gap, &gt_prev) ||
         !interpolate_pose(gt, est[i].stamp_s, max_gt_gap, &gt_now)) {
