@@ -14,9 +14,11 @@
 namespace rgbdtam {
 namespace {
 
-// with_loop: also with loop closure and relocalisation on (off where the scene's pose alone is
-// the point: the person crossing the shelves).
-void expect_never_wrong(const char* name, int frames, bool with_loop) {
+// Which loop closure settings a scene is replayed with: off only where the scene's pose alone is
+// the point (the person crossing the shelves), on only where loop closure is what is tested.
+enum class Loop { kOff, kOffAndOn, kOn };
+
+void expect_never_wrong(const char* name, int frames, Loop loops) {
   testing::RepeatedScene scene;
   ASSERT_TRUE(testing::RepeatedScene::named(name, &scene));
   const std::string dir = testing::make_temp_dir(name) + "/seq";
@@ -24,7 +26,7 @@ void expect_never_wrong(const char* name, int frames, bool with_loop) {
   const std::string vocabulary =
       "loop.vocabulary=" + testing::source_path("data/vocabulary/tum-k10-l4.voc");
   for (const bool loop : {false, true}) {
-    if (loop && !with_loop) continue;
+    if ((loop && loops == Loop::kOff) || (!loop && loops == Loop::kOn)) continue;
     const testing::ReplayOutcome out = testing::replay_and_evaluate(
         dir, dir + "/camera.conf",
         {loop ? vocabulary.c_str() : "loop.enabled=false", "map.enabled=true"});
@@ -43,25 +45,25 @@ void expect_never_wrong(const char* name, int frames, bool with_loop) {
 }
 
 TEST(RepeatedScenes, PanelsAtArmsLengthAt30HzAreTrackedOrLostNeverWrong) {
-  expect_never_wrong("panels60_d05_30hz", 90, true);
+  expect_never_wrong("panels60_d05_30hz", 90, Loop::kOffAndOn);
 }
 
 // With loop closure on, a relocalisation onto a look-alike metre-wide panel is not sent within
 // the window in which the autopilot differences poses (before: 11 false-valid in these frames).
 TEST(RepeatedScenes, MetrePanelsAt2mWithAPersonCrossingAreNeverWrong) {
-  expect_never_wrong("panels100_d2_30hz_person", 90, true);
+  expect_never_wrong("panels100_d2_30hz_person", 90, Loop::kOn);
 }
 
 TEST(RepeatedScenes, FifteenCentimetreTilesAt10HzWithSensorNoiseAreNeverWrong) {
-  expect_never_wrong("tiles15_d06_10hz_noisy", 40, true);
+  expect_never_wrong("tiles15_d06_10hz_noisy", 40, Loop::kOffAndOn);
 }
 
 TEST(RepeatedScenes, BrickWithSensorNoiseIsNeverWrong) {
-  expect_never_wrong("brick25_d1_30hz_noisy", 60, true);
+  expect_never_wrong("brick25_d1_30hz_noisy", 60, Loop::kOffAndOn);
 }
 
 TEST(RepeatedScenes, APersonCrossingShelvesDoesNotDragThePose) {
-  expect_never_wrong("shelving50_d1_30hz_person", 90, false);
+  expect_never_wrong("shelving50_d1_30hz_person", 90, Loop::kOff);
 }
 
 }  // namespace
