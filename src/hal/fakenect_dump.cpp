@@ -6,14 +6,16 @@
 #include <cstdio>
 #include <cstring>
 
+#include "rgbdtam/hal/freenect_source.hpp"
+
 namespace rgbdtam {
 namespace {
 constexpr int kLineBytes = 256;
 constexpr int kHeaderBytes = 64;  // "P6 640 480 255\n" and the like
-// The bytes after the header that fakenect copies for each frame (640x480, 11-bit depth as
-// 16 bits, RGB).
-constexpr size_t kDepthFrameBytes = 640 * 480 * 2;
-constexpr size_t kColourFrameBytes = 640 * 480 * 3;
+// The bytes after the header that fakenect copies for each frame (11-bit depth as 16 bits, RGB).
+constexpr size_t kPixels = size_t{FreenectSource::kWidth} * FreenectSource::kHeight;
+constexpr size_t kDepthFrameBytes = kPixels * 2;
+constexpr size_t kColourFrameBytes = kPixels * 3;
 
 // The line as a message can show it: non-printable bytes as '?', at most 60 of them.
 void printable(const char* line, char* out, size_t out_bytes) {
