@@ -66,7 +66,7 @@ node tools/mavlink-check/page-check.mjs build/bin board/host-emulation build/mon
 build host-debug
 check host-debug -LE long
 # Raspberry Pi 4: static, Kinect v1; its whole suite under qemu through the HIL runner, but for
-# three allocation tests and six end-to-end replays of half a minute or more under emulation
+# three allocation tests and seven end-to-end replays of half a minute or more under emulation
 # (natively seconds; the code they run is run under qemu by the other tests, such as
 # RealClip's, the kidnapped frame's, the fakenect dump's frame-exact test and the map file's
 # damage test), and two firmware tests that need frames tracked in real time (the scripted
@@ -77,6 +77,7 @@ tools/hil/run.py raspberry-pi-4 qemu: --skip '^(Allocations\.(NoneWithTheMapperA
 'NoneWhileRecoveringFromAKidnappedFrame|NoneInTheFirmwareRuntimeInAMapSavedWhileRunningOrLocalisedIn)|'\
 'RobustTracking\.(TheAutopilotsTurnIsTheFirstGuessAndAWrongOneIsRefused|AFastPanIsTrackedOrLostNeverWrong)|'\
 'Freenect\.TheFirmwareOnAKinectDumpStreamsThePosesOfTheTumReplayOfItsFrames|'\
+'RepeatedScenes\.PanelsAt10HzAfterALossAreNeverWrong|'\
 'MapFile\.(ASecondSessionIsFoundInTheFirstOnesMapAndReportsPosesInItsWorld|'\
 'LocaliseModeKeepsTheMapsPlacesWhereTheyWere|AWriterKilledAtAnyInstantLeavesAMapThatLoads)|'\
 'Firmware\.(TheAutopilotsAttitudeLevelsTheOdometryFrameAndGuidesTheTracker|'\

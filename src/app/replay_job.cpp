@@ -322,6 +322,7 @@ void ReplayJob::print_json(const EvaluationReport& r) const {
       .integer("nees_pairs", r.nees.pairs)
       .integer("misleading", r.nees.misleading)
       .integer("ambiguous", c.ambiguous)
+      .integer("beyond_search", c.beyond_search)
       .end();
 }
 

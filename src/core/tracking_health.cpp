@@ -96,7 +96,7 @@ void describe_health(uint32_t failed, char* buf, int size) {
                 {kGeometricMisfit, "geometric misfit"}, {kCostAboveTypical, "cost above typical"},
                 {kIllConditioned, "ill-conditioned"},   {kTooFast, "too fast"},
                 {kWeakDirection, "weak direction"},     {kAmbiguous, "ambiguous"},
-                {kDepthFrozen, "depth frozen"}};
+                {kDepthFrozen, "depth frozen"},         {kBeyondSearch, "beyond search"}};
   if (size <= 0) return;
   if (failed == 0) {
     std::snprintf(buf, static_cast<size_t>(size), "healthy");

@@ -156,6 +156,8 @@ Attempt TrackingPipeline::estimate(int64_t t_ns) {
   if (a.failed == 0) return a;
   ++counters_.retried;
   const uint32_t first_failure = a.failed;
+  // Searched from any guess or reference, the reach stays as wide: relocalisation may tell.
+  if ((a.failed & kBeyondSearch) != 0) return a;
   // Two minima within reach that fit the reference about as well: a wider search against it
   // can add minima, not remove those. The last valid frame, a second reference, may tell.
   if ((a.failed & kAmbiguous) == 0) {

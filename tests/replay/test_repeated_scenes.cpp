@@ -50,6 +50,14 @@ TEST(RepeatedScenes, PanelsAtArmsLengthAt30HzAreTrackedOrLostNeverWrong) {
 
 // With loop closure on, a relocalisation onto a look-alike metre-wide panel is not sent within
 // the window in which the autopilot differences poses (before: 11 false-valid in these frames).
+// Panels at arm's length at 10 Hz: frames are lost, and after two lost frames the camera can be
+// 0.3 m further along the wall, wider than the search for other minima can probe. The frame
+// after them is beyond the search, not a pose one panel seam off (before: 14.5 cm off over
+// 0.5 s, sent as valid).
+TEST(RepeatedScenes, PanelsAt10HzAfterALossAreNeverWrong) {
+  expect_never_wrong("panels60_d05_10hz_noisy", 80, Loop::kOff);
+}
+
 TEST(RepeatedScenes, MetrePanelsAt2mWithAPersonCrossingAreNeverWrong) {
   expect_never_wrong("panels100_d2_30hz_person", 90, Loop::kOn);
 }

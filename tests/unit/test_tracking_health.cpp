@@ -181,6 +181,8 @@ TEST(TrackingHealth, TwoEstimatesAFewMillimetresApartAreTheSamePose) {
   char why[64];
   describe_health(kAmbiguous, why, sizeof(why));
   EXPECT_STREQ(why, "ambiguous");
+  describe_health(kAmbiguous | kBeyondSearch, why, sizeof(why));
+  EXPECT_STREQ(why, "ambiguous, beyond search");
 }
 }  // namespace
 

@@ -48,6 +48,7 @@ enum HealthCheck : uint32_t {
   kWeakDirection = 1u << 6,     // a direction the depth leaves free is not determined either
   kAmbiguous = 1u << 7,         // another pose within the camera's reach fits about as well
   kDepthFrozen = 1u << 8,       // the sensor repeats its last depth frame (FrozenDepthCheck)
+  kBeyondSearch = 1u << 9,      // the camera's reach is wider than the search for other minima
 };
 
 // A depth sensor's noise makes any two of its frames differ in many pixels. A new depth frame

@@ -19,6 +19,10 @@ constexpr double kProbeRatio = 1.5;
 constexpr double kAmbiguityRatio = 1.5;
 constexpr int kProbeLevel = 2;
 constexpr int kMaxProbes = 96;
+// A minimum's basin at the probing levels spans about two of their pixels (the coarsest
+// converges from 2-3): probes further apart can step over one.
+constexpr double kBasinPx = 2.0;
+constexpr int kReachBeyondProbes = -1;
 }  // namespace
 
 void PoseSearch::allocate(const Keyframe& capacity_model, const TrackerOptions& tracker,
@@ -134,6 +138,12 @@ void PoseSearch::resolve_within_reach(Attempt* a, const FramePyramid& frame,
   const int from_aliases = aliases_within(*a, within, candidates);
   const int probed =
       probe_within(*a, frame, within, candidates + from_aliases, kMaxCandidates - from_aliases);
+  if (probed == kReachBeyondProbes) {
+    // Another minimum could lie between the probes: nothing says this pose is the one.
+    a->failed |= kBeyondSearch;
+    ++counters_.beyond_search;
+    return;
+  }
   if (from_aliases + probed == 0) return;
   // Each refined as tracking would, from there; the distinct healthy minima are compared at
   // the finest level. A probed one not refined (too many) could be the right one: ambiguous.
@@ -189,7 +199,8 @@ int PoseSearch::probe_within(const Attempt& a, const FramePyramid& frame, const 
   for (float& s : scales.photometric) s = kProbeSigma;
   // The scene's depth sets how far a pixel's motion is: probes a pixel apart at 160x120 (a
   // minimum's basin is a pixel or two there), or at 80x60 when the reach needs more than
-  // kMaxProbes of them, spread further apart if even that is not enough.
+  // kMaxProbes of them; a reach that even those would not cover a basin apart (a long loss,
+  // a near wall) is beyond the search.
   constexpr int kSample = 256;
   float depths[kSample];
   const TrackPoints& pts = kf.photometric(0).size() > 0 ? kf.photometric(0) : kf.geometric[0];
@@ -204,8 +215,9 @@ int PoseSearch::probe_within(const Attempt& a, const FramePyramid& frame, const 
          2.0 * within.radius_m / (depth / frame.intrinsics(level).fx_px) > kMaxProbes - 1) {
     ++level;
   }
-  const double spacing =
-      std::max(depth / frame.intrinsics(level).fx_px, 2.0 * within.radius_m / (kMaxProbes - 1));
+  const double pixel_m = depth / frame.intrinsics(level).fx_px;
+  const double spacing = std::max(pixel_m, 2.0 * within.radius_m / (kMaxProbes - 1));
+  if (spacing > kBasinPx * pixel_m) return kReachBeyondProbes;
   const Vector3d centre_c = a.T_w_c().inverse() * within.centre_w;
   // Probed on the image term, whose repeated texture makes the other minima (the depth term,
   // four times the points at these levels, is smooth along them), along the directions the

@@ -26,6 +26,7 @@ struct SearchCounters {
   uint32_t single_term = 0;          // frames whose pose came from one term, the other not fitting
   uint32_t better_within_reach = 0;  // poses replaced by a clearly better one within reach
   uint32_t ambiguous = 0;            // poses with another within reach that fits about as well
+  uint32_t beyond_search = 0;        // poses with a reach too wide to search for other minima
 };
 
 class PoseSearch {
@@ -77,7 +78,8 @@ class PoseSearch {
   // The pose moved by each of the keyframe's aliases that lands within reach, into out.
   int aliases_within(const Attempt& a, const Reach& within, Candidate* out) const;
   // The other minima probes along the surfaces' directions find within reach that fit about
-  // as well as the best at the probing level, best first; at most room of them.
+  // as well as the best at the probing level, best first; at most room of them. Negative when
+  // the reach is too wide for the probes to step on every minimum in it.
   int probe_within(const Attempt& a, const FramePyramid& frame, const Reach& within, Candidate* out,
                    int room);
   // Looks for the other minima within reach along the camera's axes: a clearly better one
