@@ -23,6 +23,15 @@ Matrix6d information_through(const Matrix6d& info_a_f, const Matrix6d& info_b_f,
   return A.transpose() * cov.ldlt().solve(I) * A;
 }
 
+Matrix6d information_with_jump(const Matrix6d& information, double jump_m, double jump_rad) {
+  const Matrix6d I = Matrix6d::Identity();
+  constexpr double kRidge = 1e-9;  // as above: a free direction stays free
+  Matrix6d cov = (information + kRidge * I).ldlt().solve(I);
+  cov.topLeftCorner<3, 3>().diagonal().array() += jump_m * jump_m;
+  cov.bottomRightCorner<3, 3>().diagonal().array() += jump_rad * jump_rad;
+  return cov.ldlt().solve(I);
+}
+
 void PoseGraph::allocate(int max_nodes, int max_edges) {
   RGBDTAM_ASSERT(max_nodes > 0 && max_edges > 0, "empty pose graph");
   max_nodes_ = max_nodes;

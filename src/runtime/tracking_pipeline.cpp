@@ -339,9 +339,16 @@ void TrackingPipeline::on_lost(const SensorFrame& frame, uint32_t failed, PoseEs
 }
 
 void TrackingPipeline::report(int64_t t_ns, PoseEstimate* out) {
-  out->flags |= motion_.take_correction_flags();
+  const CorrectionJump correction = motion_.take_correction();
+  out->flags |= correction.flags;
   out->reset_counter = motion_.reset_counter();
   const bool valid = (out->flags & kPoseValid) != 0;
+  // A correction moved the pose by a jump nothing measured: its covariance covers the jump, for
+  // a consumer that differences it with the last pose despite the reset counter.
+  if (valid && correction.flags != 0) {
+    out->information =
+        information_with_jump(out->information, correction.translation_m, correction.rotation_rad);
+  }
   // A keyframe's frame goes to the mapper with the keyframe, once built.
   if (valid && !keyframes_.due()) keyframes_.offer_to_mapper(*out, frames_.current(), nullptr);
   if (valid && motion_.withheld(t_ns)) {

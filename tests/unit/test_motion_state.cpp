@@ -2,6 +2,7 @@
 // loss is counted.
 #include <gtest/gtest.h>
 
+#include "rgbdtam/port/messages.hpp"
 #include "rgbdtam/runtime/tracking/motion_state.hpp"
 
 namespace rgbdtam {
@@ -45,6 +46,21 @@ TEST(MotionState, ALossAfterAPoseFoundWithoutTrackingIsCountedFromItsOwnFirstFra
   EXPECT_EQ(m.lost_for_ns(1056 * kMs), 33 * kMs);
   m.begin(SE3(), 1089 * kMs);  // ... relocalised onto a new keyframe ...
   EXPECT_EQ(m.lost_for_ns(1122 * kMs), 0) << "... and lost again: a new loss, not the old one";
+}
+
+// A small correction is sent, not withheld: the next pose carries the jump, so that its
+// covariance can cover it.
+TEST(MotionState, ASmallCorrectionIsFlaggedWithHowFarItMovedTheCamera) {
+  MotionState m = tracked_until(990 * kMs);
+  const SE3 delta(so3_exp(Vector3d(0.0, 0.0, 0.01)), Vector3d(0.012, 0.0, 0.0));
+  m.correct(delta, 0.05, 2.5 * M_PI / 180.0);
+  m.correct(delta, 0.05, 2.5 * M_PI / 180.0);
+  EXPECT_FALSE(m.withheld(1023 * kMs));
+  const CorrectionJump jump = m.take_correction();
+  EXPECT_EQ(jump.flags, kLoopCorrected | kReset);
+  EXPECT_NEAR(jump.translation_m, 2 * 0.012, 1e-9);  // the camera sits at the world's origin
+  EXPECT_NEAR(jump.rotation_rad, 2 * 0.01, 1e-9);
+  EXPECT_EQ(m.take_correction().flags, 0u) << "taken once";
 }
 
 }  // namespace

@@ -165,5 +165,19 @@ TEST(EdgeInformation, ThroughAFrameFollowsTheAdjoint) {
   EXPECT_NEAR(xi.dot(graph * xi), delta.dot(tracker * delta), 1e-6 * xi.dot(graph * xi));
 }
 
+TEST(PoseGraphInformation, AJumpIsAddedToEveryAxisOfTheCovariance) {
+  // Standard deviations of 1 mm and 1 mrad, and a jump of 1.6 cm and 0.01 rad.
+  Matrix6d information = Matrix6d::Identity() * 1e6;
+  information(1, 2) = information(2, 1) = 2e5;  // correlated axes keep their correlation
+  const Matrix6d widened = information_with_jump(information, 0.016, 0.01);
+  const Matrix6d expected_cov =
+      information.inverse() + (Vector6d() << 2.56e-4, 2.56e-4, 2.56e-4, 1e-4, 1e-4, 1e-4)
+                                  .finished()
+                                  .asDiagonal()
+                                  .toDenseMatrix();
+  EXPECT_LT((widened.inverse() - expected_cov).norm(), 1e-9);
+  EXPECT_LT((information_with_jump(information, 0.0, 0.0) - information).norm(), 1e-3);
+}
+
 }  // namespace
 }  // namespace rgbdtam

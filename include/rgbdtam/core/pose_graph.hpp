@@ -21,6 +21,10 @@ Matrix6d graph_information(const Matrix6d& tracker_information, const SE3& T_k_c
 // two keyframes tied by a frame both measured.
 Matrix6d information_through(const Matrix6d& info_a_f, const Matrix6d& info_b_f, const SE3& T_b_f);
 
+// The information of a pose that may also have jumped by up to jump_m and jump_rad in any
+// direction: the jump's square added to the covariance of each axis.
+Matrix6d information_with_jump(const Matrix6d& information, double jump_m, double jump_rad);
+
 struct PoseGraphStats {
   int iterations = 0;         // Gauss-Newton steps taken
   int cg_iterations = 0;      // over all steps

@@ -74,13 +74,16 @@ void MotionState::correct(const SE3& delta, double max_reported_jump_m,
   // Poses either side of a large jump are not comparable: as after a restart, none is
   // reported over the window in which a consumer differences poses.
   const SE3 jump = before.inverse() * T_w_last_;
-  if (jump.translation().norm() > max_reported_jump_m ||
-      so3_log(jump.quaternion()).norm() > max_reported_jump_rad) {
+  const double jump_m = jump.translation().norm();
+  const double jump_rad = so3_log(jump.quaternion()).norm();
+  if (jump_m > max_reported_jump_m || jump_rad > max_reported_jump_rad) {
     withhold_until_ns_ = last_ns_ + reset_after_lost_ns_;
   }
   ++reset_counter_;
   ++counters_.loop_corrections;
-  correction_flags_ |= kLoopCorrected | kReset;
+  correction_.flags |= kLoopCorrected | kReset;
+  correction_.translation_m += jump_m;
+  correction_.rotation_rad += jump_rad;
 }
 
 void MotionState::jumped(int64_t last_valid_ns) {
@@ -92,10 +95,10 @@ void MotionState::jumped(int64_t last_valid_ns) {
   ++reset_counter_;
 }
 
-uint32_t MotionState::take_correction_flags() {
-  const uint32_t flags = correction_flags_;
-  correction_flags_ = 0;
-  return flags;
+CorrectionJump MotionState::take_correction() {
+  const CorrectionJump taken = correction_;
+  correction_ = CorrectionJump();
+  return taken;
 }
 
 }  // namespace rgbdtam

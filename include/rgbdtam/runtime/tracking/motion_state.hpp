@@ -12,6 +12,14 @@
 
 namespace rgbdtam {
 
+// What the corrections since the last frame did to it: the flags (PoseFlags) and how far they
+// moved the camera, summed.
+struct CorrectionJump {
+  uint32_t flags = 0;
+  double translation_m = 0.0;
+  double rotation_rad = 0.0;
+};
+
 struct MotionCounters {
   uint32_t resets = 0;            // restarts after a loss
   uint32_t loop_corrections = 0;  // loop closures that moved the camera's world
@@ -62,8 +70,8 @@ class MotionState {
   // A loop correction moved the camera's world by delta (T_w'_w). A jump larger than the limits
   // withholds poses while consumers could difference them across it.
   void correct(const SE3& delta, double max_reported_jump_m, double max_reported_jump_rad);
-  // The flags a correction since the last frame gives the next output (PoseFlags).
-  uint32_t take_correction_flags();
+  // The corrections since the last frame, for the next output; cleared.
+  CorrectionJump take_correction();
   // A tracked pose at t_ns is not reported valid: too soon after a large correction or a jump.
   bool withheld(int64_t t_ns) const { return t_ns <= withhold_until_ns_; }
   // Whether this frame was valid: the next one's guess is certain or not.
@@ -82,7 +90,7 @@ class MotionState {
   bool previous_valid_ = false;
   int64_t lost_since_ns_ = -1;  // the first lost frame of the current loss; -1 when tracking
   uint32_t reset_counter_ = 0;
-  uint32_t correction_flags_ = 0;
+  CorrectionJump correction_;
   int64_t withhold_until_ns_ = 0;
   MotionCounters counters_;
 };
