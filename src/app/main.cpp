@@ -297,6 +297,7 @@ int replay_command(int argc, char** argv) {
                   static_cast<unsigned long long>(ply->points()));
     }
   }
+  job->print_warnings();  // on stderr, whatever stdout carries
   if (!json) {
     job->print_summary();
     if (options.trajectory_path != nullptr && s.is_ok()) {
@@ -330,6 +331,7 @@ int replay_command(int argc, char** argv) {
     std::fprintf(stderr, "rgbdtam replay: no frame was tracked, so there is no trajectory\n");
     return 1;
   }
+  if (job->system().tracking().depth_units_wrong()) return 1;  // said in print_warnings()
   if (job->stopped_early()) return kInterruptedExitCode;
   return s.is_ok() ? 0 : 1;
 }

@@ -203,6 +203,8 @@ Status ReplayJob::write_trace() const {
   return file.commit();
 }
 
+void ReplayJob::print_warnings() const { warn_about_depth(system_.tracking(), "rgbdtam replay"); }
+
 void ReplayJob::print_summary() const {
   const TrackingCounters& c = system_.tracking().counters();
   const ReplayCounters& rc = source_.counters();
@@ -220,7 +222,6 @@ void ReplayJob::print_summary() const {
       "frames set aside (not a surface), %u frozen (the last depth frame again)\n",
       c.retried, c.recovered_by_guesses, c.recovered_by_last_frame, c.single_term,
       c.depth_not_surface, c.depth_frozen);
-  warn_about_depth(c, "rgbdtam replay");
   std::printf("keyframes: %u created, %u reused, pool %d of %d, %d recycled\n", c.keyframes,
               c.reused, system_.tracking().keyframes().size(),
               system_.tracking().keyframes().capacity(), system_.tracking().keyframes().recycled());
@@ -316,6 +317,7 @@ void ReplayJob::print_json(const EvaluationReport& r) const {
       .integer("single_term", c.single_term)
       .integer("depth_not_surface", c.depth_not_surface)
       .integer("depth_frozen", c.depth_frozen)
+      .integer("depth_units_off", c.depth_units_off)
       .number("nees_mean", r.nees.pairs > 0 ? r.nees.mean : NAN)
       .number("nees_median", r.nees.pairs > 0 ? r.nees.median : NAN)
       .number("nees_p99", r.nees.pairs > 0 ? r.nees.p99 : NAN)

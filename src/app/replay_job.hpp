@@ -51,6 +51,8 @@ class ReplayJob {
   Status finish();  // the trajectory complete and in place, or the first failure
   Status write_trace() const;
   void print_summary() const;
+  // What the user must hear about the sensor's data (stderr), in either output mode.
+  void print_warnings() const;
   // The summary and the evaluation as one JSON object, for tools/bench.sh.
   void print_json(const EvaluationReport& report) const;
 

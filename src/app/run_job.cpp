@@ -397,7 +397,7 @@ void RunJob::print_summary() const {
       "kept) %u\n",
       c.frames, seconds, seconds > 0 ? c.frames / seconds : 0.0, c.tracked, c.lost, c.sensor_errors,
       withheld, sensor_.live->dropped());
-  warn_about_depth(runtime_->slam().tracking().counters(), "rgbdtam run");
+  warn_about_depth(runtime_->slam().tracking(), "rgbdtam run");
   const RecoveryCounters& r = sensor_.recovery.counters();
   std::printf(
       "sensor recovery: %u stalls, %u USB resets (%u failed), %u reopens (%u failed), %u "

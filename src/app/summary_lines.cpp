@@ -23,7 +23,21 @@ void print_loop_summary(const SlamSystem& system) {
       system.loop().search_time().percentile_ms(0.95), system.loop().optimise_time().max_ms());
 }
 
-void warn_about_depth(const TrackingCounters& c, const char* program) {
+void warn_about_depth(const TrackingPipeline& tracking, const char* program) {
+  const TrackingCounters c = tracking.counters();
+  const DepthUnitsReading& units = tracking.depth_units_off();
+  if (c.depth_units_off > 0) {
+    std::fprintf(stderr,
+                 "%s: error: %u frames' depth was not in the sensor's units, and no pose was "
+                 "sent from them: the steps between its values are %.2f times those of the "
+                 "configured sensor (depth.baseline %.3f m, depth.focal %.0f px, "
+                 "depth.disparity_quantum %.3f px); at depth.factor %.0f they would fit, where it "
+                 "is %.0f\n",
+                 program, c.depth_units_off, units.step_ratio, tracking.params().sensor.baseline_m,
+                 tracking.params().sensor.depth_focal_px,
+                 tracking.params().sensor.disparity_quantum_px, units.fitting_factor,
+                 tracking.params().sensor.depth_factor);
+  }
   if (c.depth_frozen == 0 && c.without_depth * 2 <= c.frames) return;
   std::fprintf(stderr,
                "%s: warning: %u of %u frames had no usable depth (%u repeated the last depth "

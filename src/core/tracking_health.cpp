@@ -92,11 +92,17 @@ void describe_health(uint32_t failed, char* buf, int size) {
   static constexpr struct {
     uint32_t bit;
     const char* name;
-  } kNames[] = {{kFewResiduals, "few residuals"},       {kPhotometricMisfit, "photometric misfit"},
-                {kGeometricMisfit, "geometric misfit"}, {kCostAboveTypical, "cost above typical"},
-                {kIllConditioned, "ill-conditioned"},   {kTooFast, "too fast"},
-                {kWeakDirection, "weak direction"},     {kAmbiguous, "ambiguous"},
-                {kDepthFrozen, "depth frozen"},         {kBeyondSearch, "beyond search"}};
+  } kNames[] = {{kFewResiduals, "few residuals"},
+                {kPhotometricMisfit, "photometric misfit"},
+                {kGeometricMisfit, "geometric misfit"},
+                {kCostAboveTypical, "cost above typical"},
+                {kIllConditioned, "ill-conditioned"},
+                {kTooFast, "too fast"},
+                {kWeakDirection, "weak direction"},
+                {kAmbiguous, "ambiguous"},
+                {kDepthFrozen, "depth frozen"},
+                {kBeyondSearch, "beyond search"},
+                {kDepthUnits, "depth units"}};
   if (size <= 0) return;
   if (failed == 0) {
     std::snprintf(buf, static_cast<size_t>(size), "healthy");

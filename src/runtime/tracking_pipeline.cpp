@@ -12,6 +12,7 @@ Status TrackingPipeline::init(const Params& params, KeyframePool* keyframes,
   params_.tracker = tracking_options(params);
   params_.health = health_limits(params);
   undistorter_.init(params_.camera, params_.distortion);
+  depth_units_.init(params_.sensor);
   frames_.allocate(params_.camera, params_.sensor.depth_factor, params_.sensor.depth_range);
   motion_.init(params_.tracker.motion_model, params_.reset_after_lost_ns);
   keyframes_.init(params_, keyframes, building, clock);
@@ -33,7 +34,14 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
   PoseEstimate out = begin_output(frame);
   const uint32_t sensor_failed = prepare(frame, &out);
   if (keyframes_.reference() == nullptr) {
-    start(frame, &out);
+    if (sensor_failed != 0) {
+      // Nothing to start from, and the operator is told why.
+      out.flags |= kNotInitialised | kLost;
+      out.failed_checks = sensor_failed;
+      ++counters_.lost;
+    } else {
+      start(frame, &out);
+    }
   } else {
     keyframes_.adopt_all_maps();
     adopt_corrections();
@@ -97,6 +105,11 @@ uint32_t TrackingPipeline::prepare(const SensorFrame& frame, PoseEstimate* out) 
       failed |= kDepthFrozen;
       depth_usable = false;
       ++counters_.depth_frozen;
+    }
+    if (depth_units_.off(frame.depth, frame.width_px * frame.height_px)) {
+      failed |= kDepthUnits;
+      depth_usable = false;
+      ++counters_.depth_units_off;
     }
   }
   if (!depth_usable) {

@@ -391,6 +391,22 @@ TEST(Cli, EveryTrackerLevelAtZeroIterationsIsRefusedButOneIsFine) {
   EXPECT_EQ(one.exit_code, 0) << one.err;
 }
 
+// Issue 35, item 3: the clip (made at 5000 units per metre) read at 1000 sent 45 of 49 poses
+// wrong; now none is sent but the first (the origin), and the error says which depth.factor fits.
+TEST(Cli, DepthInOtherUnitsThanTheSensorsIsRefusedAndTheFittingFactorNamed) {
+  const Outcome o =
+      rgbdtam("replay " + clip() + " --config " + config() + " --set depth.factor=1000 --json");
+  EXPECT_EQ(o.exit_code, 1) << "a run in the wrong units is a failed run";
+  // The first frame is the world's origin, sent before a second to compare its depth with.
+  EXPECT_NE(o.out.find("\"depth_units_off\": 49"), std::string::npos) << o.out;
+  EXPECT_NE(o.out.find("\"tracked\": 1"), std::string::npos) << o.out;
+  EXPECT_NE(o.err.find("not in the sensor's units"), std::string::npos) << o.err;
+  EXPECT_NE(o.err.find("at depth.factor 49"), std::string::npos) << o.err;  // 4900-5100
+  const Outcome right = rgbdtam("replay " + clip() + " --config " + config() + " --json");
+  EXPECT_EQ(right.exit_code, 0) << right.err;
+  EXPECT_NE(right.out.find("\"depth_units_off\": 0"), std::string::npos) << right.out;
+}
+
 TEST(Cli, ANearestDepthOfZeroIsRefused) {
   const Outcome o = rgbdtam("replay " + clip() + " --config " + config() + " --set depth.min=0");
   EXPECT_EQ(o.exit_code, 1);

@@ -49,6 +49,7 @@ enum HealthCheck : uint32_t {
   kAmbiguous = 1u << 7,         // another pose within the camera's reach fits about as well
   kDepthFrozen = 1u << 8,       // the sensor repeats its last depth frame (FrozenDepthCheck)
   kBeyondSearch = 1u << 9,      // the camera's reach is wider than the search for other minima
+  kDepthUnits = 1u << 10,       // the depth's steps are not the sensor's (core/depth_units.hpp)
 };
 
 // A depth sensor's noise makes any two of its frames differ in many pixels. A new depth frame

@@ -8,6 +8,7 @@
 //   PoseSearch        the tracker, its guesses and the health checks
 //   KeyframeHandover  the reference keyframe, building, adopting and mapping keyframes
 //   LoopLink          keyframes out to the loop module, corrections in, relocalisation
+//   DepthUnitsGuard   whether the depth is read in the sensor's units
 // Everything is sized in init(); process() never allocates.
 // Thread: the caller's (replay: main thread; runtime: the tracking task).
 
@@ -18,6 +19,7 @@
 #include "rgbdtam/runtime/loop_closing.hpp"
 #include "rgbdtam/runtime/mapping.hpp"
 #include "rgbdtam/runtime/params.hpp"
+#include "rgbdtam/runtime/tracking/depth_units_guard.hpp"
 #include "rgbdtam/runtime/tracking/frame_buffers.hpp"
 #include "rgbdtam/runtime/tracking/keyframe_handover.hpp"
 #include "rgbdtam/runtime/tracking/loop_link.hpp"
@@ -35,6 +37,7 @@ struct StageCounters {
   uint32_t without_depth = 0;
   uint32_t depth_not_surface = 0;        // ... of which the sensor's depth was set aside as noise
   uint32_t depth_frozen = 0;             // ... or repeated the last depth frame: lost
+  uint32_t depth_units_off = 0;          // ... or was not in the sensor's units: lost
   uint32_t retried = 0;                  // frames whose first estimate failed a health check
   uint32_t recovered_by_guesses = 0;     // ... and passed from another initial guess
   uint32_t recovered_by_last_frame = 0;  // ... or against the last valid frame
@@ -83,6 +86,10 @@ class TrackingPipeline {
   uint32_t next_keyframe_id() const { return keyframes_.next_keyframe_id(); }
 
   TrackingCounters counters() const;
+  // The reading that found the depth in other units than the sensor's (conclusive false: none).
+  const DepthUnitsReading& depth_units_off() const { return depth_units_.off_reading(); }
+  // The depth was found in other units for the run: what was sent is no trajectory.
+  bool depth_units_wrong() const { return depth_units_.latched_off(); }
   const KeyframePool& keyframes() const { return keyframes_.pool(); }
   const Params& params() const { return params_; }
   // The keyframe's pose now (loop corrections included), if it is still in the pool.
@@ -109,6 +116,7 @@ class TrackingPipeline {
   Undistorter undistorter_;
   FrameBuffers frames_;
   FrozenDepthCheck frozen_depth_;
+  DepthUnitsGuard depth_units_;
   MotionState motion_;
   MotionPriors priors_;
   PoseSearch search_;
