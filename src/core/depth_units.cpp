@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "rgbdtam/core/tracking_health.hpp"
+
 namespace rgbdtam {
 namespace {
 // Spacings within this many raw units are the raw resolution, not a rung of the ladder.
@@ -39,12 +41,11 @@ DepthUnitsReading DepthUnitsReader::read(const uint16_t* depth, int pixels, doub
   constexpr int kWords = kRawValues / 64;
   std::copy(seen_, seen_ + kWords, seen_before_);
   std::fill(seen_, seen_ + kWords, uint64_t{0});
-  uint64_t fingerprint = 14695981039346656037ull;  // FNV-1a
   for (int i = 0; i < pixels; ++i) {
     const uint16_t v = depth[i];
     if (v != 0) seen_[v >> 6] |= uint64_t{1} << (v & 63);
-    fingerprint = (fingerprint ^ v) * 1099511628211ull;
   }
+  const uint64_t fingerprint = sampled_fingerprint(depth, pixels);
   const bool another_frame = fingerprint != fingerprint_before_;
   fingerprint_before_ = fingerprint;
   int values = 0, recurring = 0;

@@ -62,10 +62,8 @@ uint32_t failed_health_checks(const TrackResult& r, const HealthContext& context
 }
 
 namespace {
-// FNV-1a over every kStride-th value: 19 200 of a VGA frame's pixels, about 20 us; a real
-// sensor's noise changes thousands of them from one frame to the next.
 template <typename T>
-uint64_t sampled_fingerprint(const T* values, int count) {
+uint64_t sampled_fingerprint_of(const T* values, int count) {
   constexpr int kStride = 16;
   uint64_t h = 14695981039346656037ull;
   for (int i = 0; i < count; i += kStride) {
@@ -74,6 +72,14 @@ uint64_t sampled_fingerprint(const T* values, int count) {
   return h;
 }
 }  // namespace
+
+uint64_t sampled_fingerprint(const uint16_t* values, int count) {
+  return sampled_fingerprint_of(values, count);
+}
+
+uint64_t sampled_fingerprint(const uint8_t* values, int count) {
+  return sampled_fingerprint_of(values, count);
+}
 
 bool FrozenDepthCheck::frozen(const uint16_t* depth, int64_t depth_stamp_ns, const uint8_t* gray,
                               int pixels) {

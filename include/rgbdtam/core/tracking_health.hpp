@@ -52,6 +52,11 @@ enum HealthCheck : uint32_t {
   kDepthUnits = 1u << 10,       // the depth's steps are not the sensor's (core/depth_units.hpp)
 };
 
+// FNV-1a over every 16th value: 19 200 of a VGA frame's pixels, about 20 us; a real sensor's
+// noise changes thousands of them from one frame to the next.
+uint64_t sampled_fingerprint(const uint16_t* values, int count);
+uint64_t sampled_fingerprint(const uint8_t* values, int count);
+
 // A depth sensor's noise makes any two of its frames differ in many pixels. A new depth frame
 // (a new stamp) with the last one's content while the image has changed is a repeat; a stream
 // that repeats itself frame after frame has stopped (a stuck driver buffer, a failed sensor)
