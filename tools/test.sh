@@ -69,9 +69,9 @@ check host-debug -LE long
 # three allocation tests and seven end-to-end replays of half a minute or more under emulation
 # (natively seconds; the code they run is run under qemu by the other tests, such as
 # RealClip's, the kidnapped frame's, the fakenect dump's frame-exact test and the map file's
-# damage test), and two firmware tests that need frames tracked in real time (the scripted
-# autopilot's attitudes; the place store filling within a second): they run in the host suites,
-# and everything on the board itself.
+# damage test), the scripted autopilot's 50 frames (each waited for: slow under emulation) and
+# the place store filling within a second (needs frames tracked in real time): they run in the
+# host suites, and everything on the board itself.
 build aarch64-raspberry-pi-4
 tools/hil/run.py raspberry-pi-4 qemu: --skip '^(Allocations\.(NoneWithTheMapperAndLoopModule|'\
 'NoneWhileRecoveringFromAKidnappedFrame|NoneInTheFirmwareRuntimeInAMapSavedWhileRunningOrLocalisedIn)|'\

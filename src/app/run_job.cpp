@@ -207,6 +207,7 @@ Status RunJob::init(const RunOptions& options) {
                                               memory_budget(board_.memory_budget_mb),
                                               &memory_needed_bytes_));
   RGBDTAM_RETURN_IF_ERROR(open_board_sensor(board_, params_, &sensor_, options.v4l2_io));
+  if (options.replay_every_frame) sensor_.replay_sensor.hold_every_frame();
   if (std::strcmp(board_.link_kind, "udp") == 0) {
     char ip[64];
     uint16_t port = 0;

@@ -33,6 +33,9 @@ struct RunOptions {
   V4l2Io* v4l2_io =
       nullptr;  // a v4l2 board's system calls; null: the real ones (a soak fakes them)
   const char* written_by = "rgbdtam";  // the build, recorded in a saved map
+  // A replay board's frames are never dropped: each waits until the tracker took the one before
+  // (a test's run is then the same on a busy machine, only slower). Other sensors ignore it.
+  bool replay_every_frame = false;
 };
 
 // Reads board_dir/board.conf and validates it.

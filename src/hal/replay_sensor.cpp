@@ -27,12 +27,14 @@ void ReplaySensor::stop() {
   }
   stop_requested_.notify_all();
   published_.notify_all();
+  taken_.notify_all();
   if (thread_.joinable()) thread_.join();
 }
 
 void ReplaySensor::publish() {
   {
-    std::lock_guard<std::mutex> lock(mutex_);
+    std::unique_lock<std::mutex> lock(mutex_);
+    if (every_frame_) taken_.wait(lock, [this] { return !fresh_ || stopping_.load(); });
     std::swap(back_, middle_);
     if (fresh_) dropped_.fetch_add(1, std::memory_order_relaxed);
     fresh_ = true;
@@ -51,7 +53,7 @@ void ReplaySensor::run() {
     const int now_index = source_->position();
     int newest = now_index;
     const int64_t now = monotonic_ns();
-    while (newest + 1 < n && due_ns(newest + 1) <= now) ++newest;
+    while (!every_frame_ && newest + 1 < n && due_ns(newest + 1) <= now) ++newest;
     dropped_.fetch_add(static_cast<uint32_t>(newest - now_index), std::memory_order_relaxed);
     source_->skip_to(newest);
     // Recorded gaps are replayed as they were, however long, so stopping must not wait them out.
@@ -99,6 +101,7 @@ Status ReplaySensor::next(SensorFrame* frame, Status* warning) {
     std::swap(front_, middle_);
     fresh_ = false;
   }
+  taken_.notify_one();
   const Slot& s = slots_[front_];
   *warning = s.warning;
   *frame = s.frame;

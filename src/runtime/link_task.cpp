@@ -91,6 +91,7 @@ void LinkTask::Sender::step(const LinkMessage& m) {
 void LinkTask::Sender::tick() {
   const int64_t now = task->clock_();
   task->link_.tick(now, task->system_status_.load(std::memory_order_relaxed));
+  task->clock_known_.store(task->link_.peer().clock_known, std::memory_order_release);
   // Once a second, the latency so far, for a ground station or the monitor to show.
   const LatencyStats& latency = task->arrival_to_odometry_;
   if (latency.count() > 0 && now - task->latency_reported_ns_ >= 1'000'000'000) {

@@ -37,7 +37,7 @@ void Monitor::drain(const SE3& T_b_c) {
 }
 
 void run_board(Monitor* monitor, RunJob* job, std::vector<std::string> overrides,
-               const std::string& board_dir) {
+               const std::string& board_dir, bool every_frame) {
   ASSERT_TRUE(monitor->udp.open(nullptr, 0, 0).is_ok());
   overrides.push_back("link.udp_remote=127.0.0.1:" + std::to_string(monitor->udp.local_port()));
   static std::vector<std::string> keep;  // the options point into these
@@ -49,6 +49,7 @@ void run_board(Monitor* monitor, RunJob* job, std::vector<std::string> overrides
   for (const std::string& o : keep)
     options.board_overrides[options.board_override_count++] = o.c_str();
   options.progress = false;
+  options.replay_every_frame = every_frame;
   const Status s = job->init(options);
   ASSERT_TRUE(s.is_ok()) << s.message();
   ASSERT_TRUE(job->start().is_ok());

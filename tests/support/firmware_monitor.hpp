@@ -31,8 +31,9 @@ struct Monitor {
 };
 
 // Runs a board (board/host-emulation unless named) with its link pointed at the monitor.
+// every_frame: a replay sensor drops no frame (RunOptions::replay_every_frame).
 void run_board(Monitor* monitor, RunJob* job, std::vector<std::string> overrides,
-               const std::string& board_dir = "");
+               const std::string& board_dir = "", bool every_frame = false);
 
 }  // namespace testing
 }  // namespace rgbdtam

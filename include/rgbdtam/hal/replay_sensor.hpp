@@ -8,6 +8,9 @@
 // Three frame slots rotate: the sensor thread decodes into one, one holds the newest published
 // frame, the tracker reads the third; a swap under a mutex is all either side ever waits for. A
 // frame that cannot be decoded is reported by next() as an error, never dropped silently.
+//
+// hold_every_frame() makes it lossless: a frame waits for the tracker to take the one before
+// it, so that a test sees the same frames however busy the machine (the run stretches instead).
 
 #include <atomic>
 #include <condition_variable>
@@ -26,6 +29,8 @@ class ReplaySensor : public LiveSensor {
   ~ReplaySensor() override;
   // Init time: allocates the slots for the source's frames (width x height).
   void open(TumReplaySource* source, int width, int height);
+  // Init time: no frame is overtaken or dropped; each waits until the previous one is taken.
+  void hold_every_frame() { every_frame_ = true; }
   Status start(const ThreadPlacement& placement) override;
   // Waits for a frame newer than the last one taken (an error after kFrameTimeoutMs);
   // kEndOfStream after the last.
@@ -51,12 +56,14 @@ class ReplaySensor : public LiveSensor {
   int back_ = 0, middle_ = 1, front_ = 2;
   bool fresh_ = false;  // middle_ holds a frame the tracker has not taken
   bool ended_ = false;
+  bool every_frame_ = false;
   // Frames that could not be delivered are never overwritten like frames: each one is
   // reported by its own next() call (with the latest message).
   int errors_pending_ = 0;
   Status error_;
   std::mutex mutex_;
   std::condition_variable published_;
+  std::condition_variable taken_;           // the tracker took the newest frame (every_frame_)
   std::condition_variable stop_requested_;  // wakes the replay thread out of a gap at once
   std::atomic<bool> stopping_{false};
   std::atomic<uint32_t> dropped_{0};

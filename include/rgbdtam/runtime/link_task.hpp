@@ -29,6 +29,11 @@ class LinkTask {
       attitudes_.pop();
     }
   }
+  // Tracker thread: attitudes received and not yet taken.
+  int attitudes_waiting() const { return attitudes_.size(); }
+  // Any thread: the autopilot's clock is known (its TIMESYNC answered), so its attitudes are
+  // taken; before that they are counted as unsynced and dropped.
+  bool autopilot_clock_known() const { return clock_known_.load(std::memory_order_acquire); }
   bool post_status(uint8_t severity, const char* text);
   // timestamp_ns: the depth frame's, in the sensor's clock (as the poses' stamps).
   bool post_obstacles(const ObstacleSectors& sectors, int64_t timestamp_ns);
@@ -67,6 +72,7 @@ class LinkTask {
   int64_t latency_reported_ns_ = 0;
   std::atomic<uint8_t> system_status_{3};  // MAV_STATE_STANDBY
   std::atomic<uint64_t> queue_drops_{0};
+  std::atomic<bool> clock_known_{false};
   Sender sender_{this};
   WorkerThread<LinkMessage, Sender> worker_;
 };
