@@ -8,37 +8,6 @@
 namespace rgbdtam {
 namespace {
 
-constexpr double kMaxMountOffsetM = 10.0;  // link.T_b_c's doc says so
-
-bool parse_pose(const char* value, void* field) {
-  double v[7];
-  int used = 0;
-  if (std::sscanf(value, "%lf %lf %lf %lf %lf %lf %lf%n", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5],
-                  &v[6], &used) != 7 ||
-      value[used] != '\0') {
-    return false;
-  }
-  for (const double x : v) {
-    if (!std::isfinite(x)) return false;  // NaN passes every comparison below unnoticed
-  }
-  const Eigen::Quaterniond q(v[0], v[1], v[2], v[3]);
-  if (std::abs(q.norm() - 1.0) > 1e-3) return false;  // a typo, not a rotation
-  // A camera is mounted on its vehicle: an offset of kilometres is a typo that would put every
-  // pose sent that far off (1e300 reached the link as inf).
-  for (int i = 4; i < 7; ++i) {
-    if (std::abs(v[i]) > kMaxMountOffsetM) return false;
-  }
-  *static_cast<SE3*>(field) = SE3(q, Vector3d(v[4], v[5], v[6]));
-  return true;
-}
-
-void print_pose(const void* field, char* out, size_t size) {
-  const SE3& T = *static_cast<const SE3*>(field);
-  const Eigen::Quaterniond& q = T.quaternion();
-  std::snprintf(out, size, "%.6g %.6g %.6g %.6g %.6g %.6g %.6g", q.w(), q.x(), q.y(), q.z(),
-                T.translation().x(), T.translation().y(), T.translation().z());
-}
-
 #define RGBDTAM_FIELD(expr) [](void* b) -> void* { return &static_cast<Board*>(b)->expr; }
 #define RGBDTAM_TEXT(key, doc, expr, required) \
   { key, ValueType::kText, 0, 0, "", doc, RGBDTAM_FIELD(expr), required }
@@ -93,7 +62,7 @@ const KeySpec kSpecs[] = {
      RGBDTAM_FIELD(link_component_id), false},
     {"link.T_b_c", ValueType::kCustom, 0, 0, "",
      "body from camera: qw qx qy qz (unit) tx ty tz (m, each within 10)", RGBDTAM_FIELD(T_b_c),
-     false, parse_pose, print_pose},
+     false, parse_pose_value, print_pose_value},
     {"obstacle.rate_hz", ValueType::kReal, 0, 30, "Hz",
      "OBSTACLE_DISTANCE from the depth image this often (0: never)",
      RGBDTAM_FIELD(obstacle_rate_hz), false},

@@ -120,7 +120,7 @@ PoseEstimate FirmwareRuntime::on_frame(const SensorFrame& frame, int64_t arrival
   }
   report_stores_full();
   (void)link_.post_pose(pose, arrival_ns, attitude_.levelled() ? &attitude_.q_l_w() : nullptr);
-  report_obstacles(frame);  // needs no pose: sent whether tracking is valid or not
+  report_obstacles(slam_.last_frame());  // needs no pose: sent valid or not
   const int64_t now = clock_();
   LedState state = valid                                                 ? LedState::kTracking
                    : (pose.flags & (kNotInitialised | kLocalising)) != 0 ? LedState::kInitialising

@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "rgbdtam/core/assert.hpp"
+#include "rgbdtam/core/se3.hpp"
 #include "rgbdtam/core/text_lines.hpp"
 
 namespace rgbdtam {
@@ -246,6 +247,37 @@ void print_key_values(const KeyTable& table, void* target, char* buf, int size,
                             s.key, value, s.doc, *s.unit != '\0' ? ", " : "", s.unit);
     }
   }
+}
+
+bool parse_pose_value(const char* value, void* field) {
+  // A camera is mounted on its vehicle, a depth camera beside its colour camera: an offset of
+  // kilometres is a typo that would put every pose sent that far off (1e300 reached the link
+  // as inf).
+  constexpr double kMaxOffsetM = 10.0;
+  double v[7];
+  int used = 0;
+  if (std::sscanf(value, "%lf %lf %lf %lf %lf %lf %lf%n", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5],
+                  &v[6], &used) != 7 ||
+      value[used] != '\0') {
+    return false;
+  }
+  for (const double x : v) {
+    if (!std::isfinite(x)) return false;  // NaN passes every comparison below unnoticed
+  }
+  const Eigen::Quaterniond q(v[0], v[1], v[2], v[3]);
+  if (std::abs(q.norm() - 1.0) > 1e-3) return false;  // a typo, not a rotation
+  for (int i = 4; i < 7; ++i) {
+    if (std::abs(v[i]) > kMaxOffsetM) return false;
+  }
+  *static_cast<SE3*>(field) = SE3(q, Vector3d(v[4], v[5], v[6]));
+  return true;
+}
+
+void print_pose_value(const void* field, char* out, size_t size) {
+  const SE3& T = *static_cast<const SE3*>(field);
+  const Eigen::Quaterniond& q = T.quaternion();
+  std::snprintf(out, size, "%.6g %.6g %.6g %.6g %.6g %.6g %.6g", q.w(), q.x(), q.y(), q.z(),
+                T.translation().x(), T.translation().y(), T.translation().z());
 }
 
 }  // namespace rgbdtam

@@ -58,6 +58,32 @@ const KeySpec kSpecs[] = {
      RGBDTAM_FIELD(distortion.p2), false},
     {"camera.k3", ValueType::kReal, -10, 10, "", "radial distortion k3",
      RGBDTAM_FIELD(distortion.k3), false},
+    {"depth_camera.fx", ValueType::kReal, 0, 1e5, "px", "depth camera focal length x",
+     RGBDTAM_FIELD(depth_camera.intrinsics.fx_px), false},
+    {"depth_camera.fy", ValueType::kReal, 0, 1e5, "px", "depth camera focal length y",
+     RGBDTAM_FIELD(depth_camera.intrinsics.fy_px), false},
+    {"depth_camera.cx", ValueType::kReal, -1e4, 1e4, "px", "depth camera principal point x",
+     RGBDTAM_FIELD(depth_camera.intrinsics.cx_px), false},
+    {"depth_camera.cy", ValueType::kReal, -1e4, 1e4, "px", "depth camera principal point y",
+     RGBDTAM_FIELD(depth_camera.intrinsics.cy_px), false},
+    {"depth_camera.k1", ValueType::kReal, -10, 10, "", "depth camera radial distortion k1",
+     RGBDTAM_FIELD(depth_camera.distortion.k1), false},
+    {"depth_camera.k2", ValueType::kReal, -10, 10, "", "depth camera radial distortion k2",
+     RGBDTAM_FIELD(depth_camera.distortion.k2), false},
+    {"depth_camera.p1", ValueType::kReal, -1, 1, "", "depth camera tangential distortion p1",
+     RGBDTAM_FIELD(depth_camera.distortion.p1), false},
+    {"depth_camera.p2", ValueType::kReal, -1, 1, "", "depth camera tangential distortion p2",
+     RGBDTAM_FIELD(depth_camera.distortion.p2), false},
+    {"depth_camera.k3", ValueType::kReal, -10, 10, "", "depth camera radial distortion k3",
+     RGBDTAM_FIELD(depth_camera.distortion.k3), false},
+    {"depth_camera.T_c_d", ValueType::kCustom, 0, 0, "",
+     "colour camera from depth camera: qw qx qy qz (unit) tx ty tz (m)",
+     RGBDTAM_FIELD(depth_camera.T_c_d), false, parse_pose_value, print_pose_value},
+    {"depth_camera.register", ValueType::kBool, 0, 1, "",
+     "move depth from its own camera (the depth_camera keys above) into the colour camera; off "
+     "where the "
+     "device registers it",
+     RGBDTAM_FIELD(depth_camera.register_to_colour), false},
     {"depth.factor", ValueType::kReal, 1e-3, 1e6, "1/m", "raw depth units per metre",
      RGBDTAM_FIELD(sensor.depth_factor), true},
     {"depth.min", ValueType::kReal, 0.01, 100, "m", "nearest valid sensor depth",
@@ -245,6 +271,24 @@ Status check_consistency(const char* source, const Params& p) {
     return Status::error(StatusCode::kInvalidArgument,
                          "%s: key 'depth.min' (%g) must be below 'depth.max' (%g)", source,
                          p.sensor.depth_range.min_m, p.sensor.depth_range.max_m);
+  }
+  if (p.depth_camera.register_to_colour) {
+    const PinholeIntrinsics& k = p.depth_camera.intrinsics;
+    if (k.fx_px <= 0 || k.fy_px <= 0) {
+      return Status::error(StatusCode::kInvalidArgument,
+                           "%s: key 'depth_camera.register' needs the depth camera's "
+                           "'depth_camera.fx'/'depth_camera.fy' (and cx, cy, its distortion and "
+                           "depth_camera.T_c_d)",
+                           source);
+    }
+    // One device's two cameras sit centimetres apart.
+    constexpr double kMaxBaselineM = 0.3;
+    if (p.depth_camera.T_c_d.translation().norm() > kMaxBaselineM) {
+      return Status::error(StatusCode::kInvalidArgument,
+                           "%s: key 'depth_camera.T_c_d' puts the depth camera %.2f m from the "
+                           "colour camera (at most %.1f: translation in metres, not mm?)",
+                           source, p.depth_camera.T_c_d.translation().norm(), kMaxBaselineM);
+    }
   }
   // The reference, three keyframes being mapped, one per queue slot, and a free one.
   const int pool_needed = p.map_queue_frames + 5;

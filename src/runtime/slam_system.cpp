@@ -23,7 +23,7 @@ MemoryNeed memory_need(const Params& p, int vocabulary_words) {
   m.images =
       pixels * (kTrackerImageBytesPerPixel + (p.map_enabled ? kMapperImageBytesPerPixel : 0)) +
       KeyframeBuildTask::bytes_needed(p, static_cast<int>(seeds)) +
-      KeyframeAliasFinder::bytes_needed(p.camera, p.tracker);
+      KeyframeAliasFinder::bytes_needed(p.camera, p.tracker) + DepthInColour::bytes_needed(p);
   if (p.loop.enabled && vocabulary_words > 0) {
     // The places, the loop module (its recogniser, view aligner and graph) and the tracker's
     // relocaliser, the keyframe queue's images and the corrections.
@@ -42,6 +42,7 @@ Status SlamSystem::init(const Params& params, ClockFn clock, MapSink* sink,
                         const Vocabulary* vocabulary) {
   params_ = params;
   clock_ = clock;
+  depth_in_colour_.init(params);
   RGBDTAM_RETURN_IF_ERROR(tracking_.init(params, &keyframes_, &building_, clock));
   if (params.map_threaded) {
     constexpr int kOrdersInFlight = 1;

@@ -93,6 +93,29 @@ TEST(Params, BadValuesNameTheFileAndTheKey) {
                "'map.keyframe_pool'");
 }
 
+// Issue 36: a depth camera of its own, registered in software.
+TEST(Params, ADepthCameraOfItsOwnIsReadAndAnIncompleteOneRefused) {
+  const std::string depth_camera =
+      "depth_camera.fx = 420\ndepth_camera.fy = 421\ndepth_camera.cx = 318\n"
+      "depth_camera.cy = 241\ndepth_camera.k1 = -0.05\n"
+      "depth_camera.T_c_d = 1 0 0 0 -0.015 0 0\ndepth_camera.register = true\n";
+  Params p;
+  ASSERT_TRUE(parse(testing::with_changes(kMinimal, depth_camera), &p).is_ok());
+  EXPECT_TRUE(p.depth_camera.register_to_colour);
+  EXPECT_EQ(p.depth_camera.intrinsics.fy_px, 421.0);
+  EXPECT_EQ(p.depth_camera.distortion.k1, -0.05);
+  EXPECT_NEAR(p.depth_camera.T_c_d.translation().x(), -0.015, 1e-12);
+  expect_error(testing::with_changes(kMinimal, "depth_camera.register = true\n"),
+               "needs the depth camera's 'depth_camera.fx'");
+  expect_error(
+      testing::with_changes(kMinimal,
+                            "depth_camera.fx = 420\ndepth_camera.fy = 421\ndepth_camera.T_c_d = 1 "
+                            "0 0 0 1.5 0 0\ndepth_camera.register = true\n"),
+      "translation in metres, not mm?");
+  expect_error(testing::with_changes(kMinimal, "depth_camera.T_c_d = 2 0 0 0 0 0 0\n"),
+               "'depth_camera.T_c_d'");
+}
+
 TEST(Params, HealthLimitsAreReadInTheirUnits) {
   Params p;
   ASSERT_TRUE(

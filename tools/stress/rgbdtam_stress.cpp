@@ -20,6 +20,7 @@ int usage() {
                "  rgbdtam-stress noise <in> <out> --config <file> --kind depth|colour|both\n"
                "                [--seed <n>]\n"
                "  rgbdtam-stress there-and-back <in> <out> --config <file>\n"
+               "  rgbdtam-stress unregister <in> <out> --config <file>\n"
                "  rgbdtam-stress pan <out> --peak-deg-s <deg/s> [--frames <n>] [--fps <hz>]\n"
                "  rgbdtam-stress degenerate <out> --scene corridor|room [--frames <n>]\n"
                "  rgbdtam-stress wall <out> --distance-m <m> --yaw-deg <deg> [--frames <n>]\n"
@@ -97,6 +98,8 @@ int main(int argc, char** argv) {
     ok = noise_sequence(positional[0], positional[1], config, kind, seed);
   } else if (verb == "there-and-back" && positional.size() == 2 && config != nullptr) {
     ok = there_and_back(positional[0], positional[1], config);
+  } else if (verb == "unregister" && positional.size() == 2 && config != nullptr) {
+    ok = unregister_depth(positional[0], positional[1], config);
   } else if (verb == "concat" && positional.size() == 3) {
     ok = concatenate(positional[0], positional[1], positional[2], gap_s);
   } else if (verb == "wander" && positional.size() == 2 && config != nullptr) {

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "rgbdtam/core/depth_registration.hpp"
 #include "rgbdtam/hal/file.hpp"
 #include "rgbdtam/hal/tum_replay_source.hpp"
 #include "rgbdtam/hal/tum_trajectory.hpp"
@@ -341,6 +342,72 @@ bool blur_sequence(const std::string& in, const std::string& out, const std::str
   if (!write_lines(out + "/rgb.txt", rgb_lines)) return false;
   std::printf("%s: %d frames, %d blurred over %.1f ms, %d without ground truth kept sharp\n",
               out.c_str(), written, written - sharp, exposure_ms, sharp);
+  return true;
+}
+
+bool unregister_depth(const std::string& in, const std::string& out, const std::string& config) {
+  Params p;
+  if (!load_params(config, &p)) return false;
+  DepthCameraParams depth_camera;
+  depth_camera.register_to_colour = true;
+  const PinholeIntrinsics& c = p.camera;
+  depth_camera.intrinsics = {c.fx_px * 1.08, c.fy_px * 1.08, c.cx_px + 4.0,
+                             c.cy_px - 3.0,  c.width_px,     c.height_px};
+  depth_camera.distortion.k1 = -0.04;
+  depth_camera.distortion.k2 = 0.01;
+  depth_camera.T_c_d = SE3(so3_exp(Vector3d(0.004, -0.008, 0.005)), Vector3d(0.025, 0.001, -0.002));
+  DepthRegistration to_depth_camera;
+  to_depth_camera.init(CameraModel{p.camera, p.distortion},
+                       CameraModel{depth_camera.intrinsics, depth_camera.distortion},
+                       depth_camera.T_c_d.inverse(), p.sensor.depth_factor);
+  TumReplaySource source;
+  Status s = source.open(in.c_str(), c.width_px, c.height_px, p.sensor.max_rgb_depth_dt_ns,
+                         p.sensor.depth_time_offset_ns);
+  if (!s.is_ok()) return fail(s.message());
+  if (!make_output(in, out) || ::mkdir((out + "/depth").c_str(), 0755) != 0 ||
+      !copy_file(in, out, "rgb.txt", true) || !copy_file(in, out, "groundtruth.txt", true) ||
+      !copy_file(in, out, "calib.txt", false) || !link_into(in, out, "rgb")) {
+    return false;
+  }
+  std::vector<std::string> depth_lines = {"# depth of " + in + " in a depth camera of its own"};
+  ImageU8 gray;
+  ImageU16 depth;
+  gray.allocate(c.width_px, c.height_px);
+  depth.allocate(c.width_px, c.height_px);
+  std::vector<uint16_t> moved(static_cast<size_t>(c.width_px) * c.height_px);
+  int64_t last_stamp_ns = -1;
+  for (;;) {
+    SensorFrame frame;
+    Status warning;
+    s = source.next_into(&gray, &depth, &frame, &warning);
+    if (s.code() == StatusCode::kEndOfStream) break;
+    // Unreadable, without depth or paired again with the last depth: nothing new to move.
+    if (!s.is_ok() || frame.depth == nullptr || frame.depth_timestamp_ns == last_stamp_ns) continue;
+    last_stamp_ns = frame.depth_timestamp_ns;
+    to_depth_camera.apply(frame.depth, moved.data());
+    const std::string name = "depth/" + std::to_string(depth_lines.size() - 1) + ".png";
+    if (!write_png_gray16(out + "/" + name, c.width_px, c.height_px, moved.data())) {
+      return fail("cannot write " + out + "/" + name);
+    }
+    char stamp[32];
+    std::snprintf(stamp, sizeof(stamp), "%.6f", static_cast<double>(last_stamp_ns) * 1e-9);
+    depth_lines.push_back(std::string(stamp) + " " + name);
+  }
+  if (!write_lines(out + "/depth.txt", depth_lines)) return false;
+  Params keys = p;
+  keys.depth_camera = depth_camera;
+  std::vector<char> listing(1 << 17);
+  print_params(keys, listing.data(), static_cast<int>(listing.size()));
+  std::vector<std::string> conf = {"# register " + out + "'s depth back to colour"};
+  for (const char* line = listing.data(); *line != '\0';) {
+    const char* end = std::strchr(line, '\n');
+    const std::string l(line, end != nullptr ? end : line + std::strlen(line));
+    if (l.rfind("depth_camera.", 0) == 0) conf.push_back(l.substr(0, l.find("  #")));
+    line = end != nullptr ? end + 1 : line + l.size();
+  }
+  if (!write_lines(out + "/depth_camera.conf", conf)) return false;
+  std::printf("%s: %zu depth frames moved into a depth camera of their own (%s)\n", out.c_str(),
+              depth_lines.size() - 1, (out + "/depth_camera.conf").c_str());
   return true;
 }
 

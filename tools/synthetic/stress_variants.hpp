@@ -51,6 +51,12 @@ bool concatenate(const std::string& first, const std::string& second, const std:
 // new 30 Hz stamps (depth at config's pairing offset), so places repeat at other times.
 bool wander_sequence(const std::string& in, const std::string& out, const std::string& config,
                      int frames, unsigned seed);
+// The depth of a sequence registered to colour moved out into a depth camera of its own, as a
+// RealSense or Orbbec over plain UVC delivers it: 2.5 cm to the side of the colour camera, 8 %
+// longer focal length, another principal point and distortion, under a degree of rotation
+// (nearest surface wins; what it cannot see is a hole). out/depth_camera.conf holds the keys
+// that register it back (depth_camera.*).
+bool unregister_depth(const std::string& in, const std::string& out, const std::string& config);
 // A degenerate synthetic scene (SyntheticScene::Layout: "corridor" or "room"), 30 Hz.
 bool degenerate_sequence(const std::string& out, const std::string& layout, int frames);
 

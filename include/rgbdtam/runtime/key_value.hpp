@@ -55,4 +55,9 @@ enum class KeyListing { kFile, kMarkdown };
 void print_key_values(const KeyTable& table, void* target, char* buf, int size,
                       KeyListing listing = KeyListing::kFile);
 
+// kCustom functions for an SE3 written `qw qx qy qz tx ty tz` (a unit quaternion, metres each
+// within 10).
+bool parse_pose_value(const char* value, void* field);
+void print_pose_value(const void* field, char* out, size_t size);
+
 }  // namespace rgbdtam

@@ -8,6 +8,7 @@
 
 #include "rgbdtam/core/camera.hpp"
 #include "rgbdtam/core/pyramid.hpp"
+#include "rgbdtam/core/se3.hpp"
 #include "rgbdtam/core/status.hpp"
 #include "rgbdtam/core/tracker.hpp"
 #include "rgbdtam/core/tracking_health.hpp"
@@ -30,6 +31,16 @@ struct SensorModel {
   double inverse_depth_quantum_sigma() const {
     return disparity_quantum_px / std::sqrt(12.0) / (depth_focal_px * baseline_m);
   }
+};
+
+// A depth camera of its own whose depth the device does not register to colour (RealSense and
+// Orbbec over plain UVC): it is moved into the colour camera in software
+// (core/depth_registration). Off where the device registers (Kinect v1, OpenNI2, TUM data).
+struct DepthCameraParams {
+  bool register_to_colour = false;
+  PinholeIntrinsics intrinsics;  // its size is the colour camera's
+  RadTanDistortion distortion;
+  SE3 T_c_d;  // colour camera from depth camera
 };
 
 // Loop closure, relocalisation and map reuse (paper sec. VI).
@@ -70,6 +81,7 @@ enum class MapMode {
 struct Params {
   PinholeIntrinsics camera{517.3, 516.5, 318.6, 255.3, 640, 480};
   RadTanDistortion distortion;
+  DepthCameraParams depth_camera;
   SensorModel sensor;
   TrackerOptions tracker;
   // The reported pose covariance is this times the inverse of the Gauss-Newton information,

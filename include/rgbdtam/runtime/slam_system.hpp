@@ -5,6 +5,7 @@
 // init() allocates everything, start() starts the mapper thread; process() never allocates.
 
 #include "rgbdtam/port/thread_placement.hpp"
+#include "rgbdtam/runtime/depth_in_colour.hpp"
 #include "rgbdtam/runtime/map_checkpoint.hpp"
 #include "rgbdtam/runtime/map_file.hpp"
 #include "rgbdtam/runtime/mapping.hpp"
@@ -48,7 +49,14 @@ class SlamSystem {
                const ThreadPlacement& builder = ThreadPlacement());
   // track() then map_pending().
   PoseEstimate process(const SensorFrame& frame);
-  PoseEstimate track(const SensorFrame& frame) { return tracking_.process(frame); }
+  // The frame's depth is moved into the colour camera first where it comes from a camera of its
+  // own (depth_camera.register).
+  PoseEstimate track(const SensorFrame& frame) {
+    return tracking_.process(depth_in_colour_.apply(frame));
+  }
+  // The frame last tracked, its depth in the colour camera (what obstacles are measured in).
+  // Until the next track().
+  const SensorFrame& last_frame() const { return depth_in_colour_.last(); }
   // The next frame's turn as another sensor saw it (TrackingPipeline::set_rotation_prior).
   void set_rotation_prior(const RotationPrior& prior) { tracking_.set_rotation_prior(prior); }
   // After the pose is out: the keyframe the frame asked for is ordered (if it did not,
@@ -83,6 +91,7 @@ class SlamSystem {
 
  private:
   Params params_;
+  DepthInColour depth_in_colour_;
   KeyframePool keyframes_;  // dense tier; the light tier is places_
   TrackingPipeline tracking_;
   KeyframeBuildTask building_;

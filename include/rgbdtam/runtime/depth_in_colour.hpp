@@ -1,0 +1,32 @@
+#pragma once
+// The frame as the tracker and the obstacle reporter take it: its depth in the colour camera.
+// A sensor that registers depth itself passes through; one whose depth comes from a camera of
+// its own (depth_camera.register) has it moved into the colour camera here, into a buffer
+// allocated at init.
+
+#include "rgbdtam/core/depth_registration.hpp"
+#include "rgbdtam/port/messages.hpp"
+#include "rgbdtam/runtime/params.hpp"
+
+namespace rgbdtam {
+
+class DepthInColour {
+ public:
+  // Init time.
+  void init(const Params& params);
+  // The frame with its depth in the colour camera; valid until the next call (it may point
+  // into this object).
+  const SensorFrame& apply(const SensorFrame& frame);
+  // The last apply()'s result.
+  const SensorFrame& last() const { return frame_; }
+  // Bytes init allocates for these params.
+  static size_t bytes_needed(const Params& params);
+
+ private:
+  bool on_ = false;
+  DepthRegistration registration_;
+  ImageU16 registered_;
+  SensorFrame frame_;
+};
+
+}  // namespace rgbdtam
