@@ -44,8 +44,7 @@ packages=(build-essential cmake ninja-build libeigen3-dev libpng-dev zlib1g-dev 
 # playwright-core (both pinned in its lockfile). A Node that is already there (with its npm) is
 # used as it is.
 command -v node >/dev/null && command -v npm >/dev/null || packages+=(nodejs npm)
-# ccache: the test command's two aarch64 boards share their core's objects through it.
-if $aarch64; then packages+=(g++-aarch64-linux-gnu qemu-user ccache); fi
+if $aarch64; then packages+=(g++-aarch64-linux-gnu qemu-user); fi
 if $fuzz; then packages+=(clang); fi  # libFuzzer ships with Debian's clang
 if $cost; then packages+=(valgrind llvm); fi
 # rgbdtam-vs-opencv (the dynamic build's host benchmark) compares with OpenCV's RgbdOdometry.
