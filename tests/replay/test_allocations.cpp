@@ -84,6 +84,18 @@ TEST(Allocations, NoneWhileTrackingTheClipAfterInit) {
       calls, job.source().png_arena_high_water());
 }
 
+// Issue 36: registering depth from a camera of its own draws on buffers made at init.
+TEST(Allocations, NoneWhileRegisteringDepthFromACameraOfItsOwn) {
+  ReplayJob job;
+  const long calls = count_allocations_after_init(
+      {"map.enabled=false", "depth_camera.fx=560", "depth_camera.fy=560", "depth_camera.cx=322",
+       "depth_camera.cy=250", "depth_camera.k1=-0.04", "depth_camera.T_c_d=1 0 0 0 0.025 0 0",
+       "depth_camera.register=true"},
+      &job);
+  EXPECT_EQ(calls, 0) << g_bytes.load() << " bytes allocated after init";
+  EXPECT_GT(job.counters().tracked, 40u);
+}
+
 TEST(Allocations, NoneWithTheMapperAndLoopModuleSynchronousOrOnTheirOwnThreads) {
   // Every thread's allocations are counted: the loop module's memory is fixed at init too, as
   // it aligns views, adds edges and measures the graph.
