@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 
 #include "rgbdtam/core/assert.hpp"
+#include "rgbdtam/core/lanes.hpp"
 
 namespace rgbdtam {
 namespace {
@@ -14,22 +14,11 @@ constexpr uint16_t kEmpty = 0xFFFF;  // the z-buffer's "nothing yet"; 0 (a hole)
 constexpr float kMaxFootprintPx = 16.0f;
 // ceil() for x > -1 (x < INT_MAX): the library's is a call where SSE2 has no rounding
 // instruction, and this is every pixel's.
-using Lanes = float __attribute__((vector_size(16)));
-constexpr int kLanes = 4;
-Lanes load_lanes(const float* p) {
-  Lanes v;
-  std::memcpy(&v, p, sizeof(v));  // unaligned
-  return v;
-}
-void store_lanes(Lanes v, float* p) { std::memcpy(p, &v, sizeof(v)); }
-
 int ceil_above_minus_one(float x) {
   const int truncated = static_cast<int>(x);
   return truncated < x ? truncated + 1 : truncated;
 }
-}  // namespace
 
-namespace {
 // A point of the target's frame to its raw (distorted) pixel.
 void project_distorted(const CameraModel& camera, const Vector3d& p, double* u, double* v) {
   double xd = 0, yd = 0;

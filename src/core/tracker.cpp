@@ -6,6 +6,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
+#include "rgbdtam/core/lanes.hpp"
 #include "rgbdtam/core/tracker.hpp"
 
 namespace rgbdtam {
@@ -120,7 +121,6 @@ void geometric_residuals(const float* __restrict c00, const float* __restrict c0
 
 // Sums kLanes interleaved partial sums, so that the compiler may vectorise a float reduction
 // without reordering it; blocks of points are summed in float and the blocks in double.
-constexpr int kLanes = 4;
 constexpr int kSumBlock = 256;
 static_assert(TrackPoints::kBlock % kLanes == 0 && kSumBlock % TrackPoints::kBlock == 0,
               "lanes tile the padded point arrays");
@@ -136,16 +136,6 @@ double sum_padded(const float* v, int n_padded) {
     for (const float s : lane) total += s;
   }
   return total;
-}
-
-// Four floats, one SSE2 or NEON register; GCC and Clang lower the arithmetic to either.
-using Lanes = float __attribute__((vector_size(16)));
-static_assert(sizeof(Lanes) == kLanes * sizeof(float), "one lane per partial sum");
-
-Lanes load_lanes(const float* p) {
-  Lanes v;
-  std::memcpy(&v, p, sizeof(v));  // unaligned
-  return v;
 }
 
 double fold_lanes(Lanes v) { return (v[0] + v[1]) + (v[2] + v[3]); }
