@@ -72,8 +72,10 @@ void DepthRegistration::init(const CameraModel& source, const CameraModel& targe
           half_v = std::max(half_v, std::abs(v - v_centre));
         }
       }
-      half_width_[i] = static_cast<float>(half_u);
-      half_height_[i] = static_cast<float>(half_v);
+      // A square too large is left out for good: an empty bound covers no pixel.
+      const bool surface = 2 * half_u <= kMaxFootprintPx && 2 * half_v <= kMaxFootprintPx;
+      half_width_[i] = surface ? static_cast<float>(half_u) : -1.0f;
+      half_height_[i] = surface ? static_cast<float>(half_v) : -1.0f;
     }
   }
 }
@@ -127,9 +129,8 @@ void DepthRegistration::apply(const uint16_t* source, uint16_t* out) {
       const float half_v = half_height_[base + static_cast<size_t>(x)];
       const float u0 = u_[x] - half_u, u1 = u_[x] + half_u;
       const float v0 = v_[x] - half_v, v1 = v_[x] + half_v;
-      // Not NaN, inside the image, and a surface's footprint.
+      // Not NaN, and inside the image.
       if (!(u1 > 0.0f && v1 > 0.0f && u0 < width && v0 < height)) continue;
-      if (!(u1 - u0 <= kMaxFootprintPx && v1 - v0 <= kMaxFootprintPx)) continue;
       // The target pixels whose centres lie in [u0, u1) x [v0, v1).
       const int x0 = ceil_above_minus_one(std::max(u0, -0.5f));
       const int x1 = std::min(width, ceil_above_minus_one(u1));
