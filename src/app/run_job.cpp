@@ -81,18 +81,25 @@ Status open_replay(const Board& board, const Params& params, BoardSensor* sensor
 }
 
 Status open_v4l2(const Board& board, const Params& params, BoardSensor* sensor, V4l2Io* v4l2_io) {
-  // sensor.device = <depth node>,<colour node>
-  char depth[kTextBytes];
-  const char* comma = std::strchr(board.sensor_device, ',');
-  if (comma == nullptr) {
-    return Status::error(StatusCode::kInvalidArgument,
-                         "board '%s': sensor.device for v4l2 is '<depth node>,<colour node>'",
-                         board.name);
+  // sensor.device = <depth node>,<colour node>, or usb: found by sensor.usb_id
+  char depth[kTextBytes] = "";
+  const char* colour = "";
+  UsbId usb;
+  if (std::strcmp(board.sensor_device, "usb") == 0 && parse_usb_id(board.sensor_usb_id, &usb)) {
+    sensor->v4l2.locate_by_usb(usb, board.sysfs_root, board.devfs_root);
+  } else {
+    const char* comma = std::strchr(board.sensor_device, ',');
+    if (comma == nullptr) {
+      return Status::error(
+          StatusCode::kInvalidArgument,
+          "board '%s': sensor.device for v4l2 is '<depth node>,<colour node>' or usb", board.name);
+    }
+    std::snprintf(depth, sizeof(depth), "%.*s", static_cast<int>(comma - board.sensor_device),
+                  board.sensor_device);
+    colour = comma + 1;
   }
-  std::snprintf(depth, sizeof(depth), "%.*s", static_cast<int>(comma - board.sensor_device),
-                board.sensor_device);
   RGBDTAM_RETURN_IF_ERROR(sensor->v4l2.open(
-      v4l2_io != nullptr ? v4l2_io : &sensor->v4l2_io, depth, comma + 1, params.camera.width_px,
+      v4l2_io != nullptr ? v4l2_io : &sensor->v4l2_io, depth, colour, params.camera.width_px,
       params.camera.height_px, params.sensor.max_rgb_depth_dt_ns, kFrameTimeoutMs,
       std::strcmp(board.sensor_colour, "mjpeg") == 0 ? V4l2Colour::kMjpeg : V4l2Colour::kYuyv));
   sensor->live = &sensor->v4l2;
@@ -381,6 +388,22 @@ void print_attitude(const FirmwareRuntime& runtime, const PoseLinkCounters& lc) 
 }
 }  // namespace
 
+namespace {
+void print_v4l2_summary(const V4l2Source& v4l2) {
+  const V4l2Nodes& n = v4l2.nodes();
+  const V4l2Counters& c = v4l2.counters();
+  std::printf("v4l2: depth %s, colour %s", n.depth, n.colour);
+  if (n.depth_metadata[0] != '\0' || n.colour_metadata[0] != '\0') {
+    std::printf(" (their metadata nodes, not read: %s %s)", n.depth_metadata, n.colour_metadata);
+  }
+  std::printf(
+      "; depth minus colour stamp %+.1f ms mean (%+.1f to %+.1f) over %u pairs, %u unpaired, %u "
+      "requeues refused, %u error buffers\n",
+      c.mean_pair_offset_ns() * 1e-6, c.pair_offset_min_ns * 1e-6, c.pair_offset_max_ns * 1e-6,
+      c.delivered, c.unpaired, c.requeue_failures, c.error_buffers);
+}
+}  // namespace
+
 void RunJob::print_summary() const {
   const FirmwareCounters& c = runtime_->counters();
   const double seconds = wall_ns_ * 1e-9;
@@ -399,6 +422,7 @@ void RunJob::print_summary() const {
       c.frames, seconds, seconds > 0 ? c.frames / seconds : 0.0, c.tracked, c.lost, c.sensor_errors,
       withheld, sensor_.live->dropped());
   warn_about_depth(runtime_->slam().tracking(), "rgbdtam run");
+  if (std::strcmp(board_.sensor_kind, "v4l2") == 0) print_v4l2_summary(sensor_.v4l2);
   const RecoveryCounters& r = sensor_.recovery.counters();
   std::printf(
       "sensor recovery: %u stalls, %u USB resets (%u failed), %u reopens (%u failed), %u "

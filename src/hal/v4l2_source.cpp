@@ -19,15 +19,15 @@ namespace {
 // Consecutive EINTR/EAGAIN answers before the device counts as stuck (a fake or a broken
 // driver could otherwise keep the tracker spinning).
 constexpr int kMaxRetries = 100;
+}  // namespace
 
-void fourcc_text(uint32_t f, char out[5]) {
+void v4l2_fourcc_text(uint32_t fourcc, char out[5]) {
   for (int i = 0; i < 4; ++i) {
-    const char c = static_cast<char>((f >> (8 * i)) & 0xFF);
+    const char c = static_cast<char>((fourcc >> (8 * i)) & 0xFF);
     out[i] = c >= 32 && c < 127 ? c : '?';
   }
   out[4] = '\0';
 }
-}  // namespace
 
 int SystemV4l2Io::open(const char* path, int flags) { return ::open(path, flags); }
 int SystemV4l2Io::close(int fd) { return ::close(fd); }
@@ -71,7 +71,7 @@ Status V4l2Stream::open(V4l2Io* io, const char* path, uint32_t fourcc, int width
   fmt.fmt.pix.pixelformat = fourcc;
   fmt.fmt.pix.field = V4L2_FIELD_NONE;
   char want[5], got[5];
-  fourcc_text(fourcc, want);
+  v4l2_fourcc_text(fourcc, want);
   if (io->ioctl(fd_, VIDIOC_S_FMT, &fmt) < 0) {
     return Status::error(StatusCode::kInvalidArgument, "%s: format %s %dx%d refused: %s", path,
                          want, width, height, std::strerror(errno));
@@ -79,7 +79,7 @@ Status V4l2Stream::open(V4l2Io* io, const char* path, uint32_t fourcc, int width
   // The driver answers with the nearest format it has: anything else is a refusal.
   if (fmt.fmt.pix.pixelformat != fourcc || fmt.fmt.pix.width != static_cast<uint32_t>(width) ||
       fmt.fmt.pix.height != static_cast<uint32_t>(height)) {
-    fourcc_text(fmt.fmt.pix.pixelformat, got);
+    v4l2_fourcc_text(fmt.fmt.pix.pixelformat, got);
     return Status::error(StatusCode::kInvalidArgument,
                          "%s: format %s %dx%d refused; the device offers %s %ux%u", path, want,
                          width, height, got, fmt.fmt.pix.width, fmt.fmt.pix.height);
@@ -109,7 +109,8 @@ Status V4l2Stream::open(V4l2Io* io, const char* path, uint32_t fourcc, int width
     }
     buffers_[i].start = start;
     buffers_[i].length = b.length;
-    RGBDTAM_RETURN_IF_ERROR(release(i));
+    owed_[i] = false;
+    RGBDTAM_RETURN_IF_ERROR(queue(i));
   }
   v4l2_buf_type type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
   if (io->ioctl(fd_, VIDIOC_STREAMON, &type) < 0) {
@@ -119,23 +120,43 @@ Status V4l2Stream::open(V4l2Io* io, const char* path, uint32_t fourcc, int width
   return Status::ok();
 }
 
-Status V4l2Stream::release(int index) {
+Status V4l2Stream::queue(int index) {
   v4l2_buffer b{};
   b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
   b.memory = V4L2_MEMORY_MMAP;
   b.index = static_cast<uint32_t>(index);
   if (io_->ioctl(fd_, VIDIOC_QBUF, &b) < 0) {
-    return Status::error(StatusCode::kIoError, "%s: queueing buffer %d: %s", path_, index,
-                         errno == ENODEV ? "device unplugged" : std::strerror(errno));
+    const int error = errno;
+    return Status::error(error == ENODEV ? StatusCode::kNotFound : StatusCode::kIoError,
+                         "%s: queueing buffer %d: %s", path_, index,
+                         error == ENODEV ? "device unplugged" : std::strerror(error));
+  }
+  return Status::ok();
+}
+
+Status V4l2Stream::release(int index, V4l2Counters* counters) {
+  const Status s = queue(index);
+  if (s.is_ok() || s.code() == StatusCode::kNotFound) return s;
+  ++counters->requeue_failures;
+  owed_[index] = true;
+  return Status::ok();
+}
+
+Status V4l2Stream::requeue_owed(V4l2Counters* counters) {
+  for (int i = 0; i < count_; ++i) {
+    if (!owed_[i]) continue;
+    owed_[i] = false;
+    RGBDTAM_RETURN_IF_ERROR(release(i, counters));
   }
   return Status::ok();
 }
 
 Status V4l2Stream::take(int timeout_ms, int* index, int64_t* timestamp_ns, V4l2Counters* counters) {
   *index = -1;
+  RGBDTAM_RETURN_IF_ERROR(requeue_owed(counters));
   // An error while holding a buffer gives it back first.
   auto fail = [&](Status s) {
-    if (*index >= 0) (void)release(*index);
+    if (*index >= 0) (void)release(*index, counters);
     *index = -1;
     return s;
   };
@@ -169,13 +190,13 @@ Status V4l2Stream::take(int timeout_ms, int* index, int64_t* timestamp_ns, V4l2C
     }
     if ((b.flags & V4L2_BUF_FLAG_ERROR) != 0) {
       ++counters->error_buffers;
-      const Status r = release(static_cast<int>(b.index));
+      const Status r = release(static_cast<int>(b.index), counters);
       if (!r.is_ok()) return fail(r);
       continue;
     }
     if (*index >= 0) {  // a newer frame overtook the one held so far
       ++counters->overtaken;
-      const Status r = release(*index);
+      const Status r = release(*index, counters);
       *index = -1;
       if (!r.is_ok()) return fail(r);
     }
@@ -214,18 +235,28 @@ Status V4l2Source::open(V4l2Io* io, const char* depth_path, const char* colour_p
   max_pair_dt_ns_ = max_pair_dt_ns;
   timeout_ms_ = timeout_ms;
   io_ = io;
-  std::snprintf(depth_path_, sizeof(depth_path_), "%s", depth_path);
-  std::snprintf(colour_path_, sizeof(colour_path_), "%s", colour_path);
+  std::snprintf(nodes_.depth, sizeof(nodes_.depth), "%s", depth_path);
+  std::snprintf(nodes_.colour, sizeof(nodes_.colour), "%s", colour_path);
   gray_.allocate(width, height);
   depth_img_.allocate(width, height);
   return open_stream();
 }
 
+void V4l2Source::locate_by_usb(const UsbId& usb, const char* sysfs_root, const char* devfs_root) {
+  by_usb_ = true;
+  usb_ = usb;
+  sysfs_root_ = sysfs_root;
+  devfs_root_ = devfs_root;
+}
+
 Status V4l2Source::open_stream() {
-  RGBDTAM_RETURN_IF_ERROR(depth_.open(io_, depth_path_, V4L2_PIX_FMT_Z16, width_, height_));
-  return colour_.open(io_, colour_path_,
-                      colour_format_ == V4l2Colour::kMjpeg ? V4L2_PIX_FMT_MJPEG : V4L2_PIX_FMT_YUYV,
-                      width_, height_);
+  const uint32_t colour =
+      colour_format_ == V4l2Colour::kMjpeg ? V4L2_PIX_FMT_MJPEG : V4L2_PIX_FMT_YUYV;
+  if (by_usb_) {
+    RGBDTAM_RETURN_IF_ERROR(finder_.find(io_, sysfs_root_, devfs_root_, usb_, colour, &nodes_));
+  }
+  RGBDTAM_RETURN_IF_ERROR(depth_.open(io_, nodes_.depth, V4L2_PIX_FMT_Z16, width_, height_));
+  return colour_.open(io_, nodes_.colour, colour, width_, height_);
 }
 
 Status V4l2Source::next(SensorFrame* frame, Status* warning) {
@@ -239,11 +270,11 @@ Status V4l2Source::next(SensorFrame* frame, Status* warning) {
   while (s.is_ok() && (td - tc > max_pair_dt_ns_ || tc - td > max_pair_dt_ns_)) {
     ++counters_.unpaired;
     if (td < tc) {
-      s = depth_.release(d);
+      s = depth_.release(d, &counters_);
       d = -1;
       if (s.is_ok()) s = depth_.take(timeout_ms_, &d, &td, &counters_);
     } else {
-      s = colour_.release(c);
+      s = colour_.release(c, &counters_);
       c = -1;
       if (s.is_ok()) s = colour_.take(timeout_ms_, &c, &tc, &counters_);
     }
@@ -265,11 +296,11 @@ Status V4l2Source::next(SensorFrame* frame, Status* warning) {
   }
   // Buffers go back to the driver whatever happened.
   if (d >= 0) {
-    const Status r = depth_.release(d);
+    const Status r = depth_.release(d, &counters_);
     if (s.is_ok()) s = r;
   }
   if (c >= 0) {
-    const Status r = colour_.release(c);
+    const Status r = colour_.release(c, &counters_);
     if (s.is_ok()) s = r;
   }
   RGBDTAM_RETURN_IF_ERROR(s);
@@ -277,6 +308,14 @@ Status V4l2Source::next(SensorFrame* frame, Status* warning) {
   frame->sequence = sequence_++;
   frame->timestamp_ns = tc;
   frame->depth_timestamp_ns = td;
+  const int64_t offset = td - tc;
+  if (counters_.delivered == 0 || offset < counters_.pair_offset_min_ns) {
+    counters_.pair_offset_min_ns = offset;
+  }
+  if (counters_.delivered == 0 || offset > counters_.pair_offset_max_ns) {
+    counters_.pair_offset_max_ns = offset;
+  }
+  counters_.pair_offset_sum_ns += offset;
   frame->gray = gray_.data();
   frame->depth = depth_img_.data();
   frame->width_px = width_;

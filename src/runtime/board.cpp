@@ -20,9 +20,11 @@ const KeySpec kSpecs[] = {
     {"board.cpu_count", ValueType::kInt, 1, 256, "", "CPU cores thread placement may name",
      RGBDTAM_FIELD(cpu_count), true},
     RGBDTAM_TEXT("sensor.kind", "the sensor backend (docs/sensors.md)", sensor_kind, true),
-    RGBDTAM_TEXT("sensor.device",
-                 "replay: TUM folder; fakenect: libfreenect dump folder; else device path or URI",
-                 sensor_device, true),
+    RGBDTAM_TEXT(
+        "sensor.device",
+        "replay: TUM folder; fakenect: libfreenect dump folder; v4l2: '<depth node>,<colour "
+        "node>' or usb (found by sensor.usb_id); else device path or URI",
+        sensor_device, true),
     RGBDTAM_TEXT("sensor.config", "camera and tracking params file", sensor_config, true),
     RGBDTAM_TEXT("sensor.colour", "v4l2: the colour node's format, yuyv or mjpeg", sensor_colour,
                  false),
@@ -253,6 +255,13 @@ Status validate_board(const Board& b) {
     return Status::error(StatusCode::kInvalidArgument,
                          "board '%s': sensor.usb_id '%s' is not vendor:product in hex", b.name,
                          b.sensor_usb_id);
+  }
+  if (std::strcmp(b.sensor_kind, "v4l2") == 0 && std::strcmp(b.sensor_device, "usb") == 0 &&
+      b.sensor_usb_id[0] == '\0') {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "board '%s': sensor.device = usb finds the camera's nodes by its USB id: "
+                         "set sensor.usb_id (e.g. 8086:0b07 for a RealSense D435)",
+                         b.name);
   }
   static const char* const kColours[] = {"yuyv", "mjpeg"};
   if (!one_of(b.sensor_colour, kColours, 2)) {

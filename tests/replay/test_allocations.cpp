@@ -246,7 +246,8 @@ void v4l2_sleep_until(int64_t t) { g_v4l2->now_ns = t > g_v4l2->now_ns ? t : g_v
 
 TEST(Allocations, NoneWhileAV4l2SensorDeliversSkipsAndTimesOut) {
   // The V4L2 backend behind the stall recovery, on the scripted fake: paired frames, a buffer
-  // flagged as an error, EINTR, a tracker that fell behind, and a short silence (timeouts).
+  // flagged as an error, EINTR, refused requeues, a tracker that fell behind, and a short
+  // silence (timeouts).
   testing::FakeV4l2 io;
   g_v4l2 = &io;
   io.nodes.reserve(2);
@@ -276,6 +277,7 @@ TEST(Allocations, NoneWhileAV4l2SensorDeliversSkipsAndTimesOut) {
   g_armed = true;
   for (int call = 0; call < 80 && (!depth.script.empty() || !colour.script.empty()); ++call) {
     if (call == 30) io.now_ns += 100 * testing::kMs;  // the tracker fell behind
+    if (call == 25) depth.qbuf_failures = 2;
     SensorFrame f;
     Status warning;
     recovery.next(&f, &warning).is_ok() ? ++frames : ++errors;
@@ -285,6 +287,7 @@ TEST(Allocations, NoneWhileAV4l2SensorDeliversSkipsAndTimesOut) {
   EXPECT_GE(errors, 2) << "the silence must be part of the counted run";
   EXPECT_GT(source.counters().error_buffers + source.counters().retries, 1u);
   EXPECT_GT(source.dropped(), 0u);
+  EXPECT_EQ(source.counters().requeue_failures, 2u);
   EXPECT_EQ(g_calls.load(), 0) << g_bytes.load() << " bytes allocated while streaming";
   std::printf("v4l2 + recovery: %d frames, %d errors, %u dropped, %ld allocations\n", frames,
               errors, source.dropped(), g_calls.load());

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "fake_usb.hpp"
 #include "stress_variants.hpp"
 #include "test_paths.hpp"
 #include "tum_writer.hpp"
@@ -124,6 +125,19 @@ TEST(Cli, EvalPlotsTheTrajectoryAsSvgAndNamesAPlotItCannotWrite) {
   o = rgbdtam("eval " + gt + " " + gt + " --plot " + dir + "/missing/plot.svg");
   EXPECT_EQ(o.exit_code, 1);
   EXPECT_NE(o.err.find("--plot"), std::string::npos) << o.err;
+}
+
+TEST(Cli, AV4l2CameraFoundByUsbIdWithoutItsVideoNodesIsAClearError) {
+  // A D435 attached, but uvcvideo has made no node for it (unbound, or still enumerating).
+  const std::string sysfs = testing::make_temp_dir("cli_v4l2_usb");
+  ASSERT_TRUE(testing::add_usb_device(sysfs, "2-1", "8086", "0b07", 2, 3));
+  const std::string board =
+      "--board " + testing::source_path("board/host-emulation") +
+      " --board-set sensor.kind=v4l2 --board-set sensor.device=usb" +
+      " --board-set sensor.usb_id=8086:0b07 --board-set board.sysfs_root=" + sysfs;
+  const Outcome o = rgbdtam("run " + board + " --max-frames 1 --quiet");
+  EXPECT_EQ(o.exit_code, 1);
+  EXPECT_NE(o.err.find("USB 8086:0b07 has no video node"), std::string::npos) << o.err;
 }
 
 #if RGBDTAM_WITH_FAKENECT

@@ -1,6 +1,7 @@
 #include "fake_usb.hpp"
 
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <cstdio>
 
@@ -37,6 +38,16 @@ std::string add_usbfs_node(const std::string& devfs_root, int bus, int address) 
   std::snprintf(node, sizeof(node), "/%03d", address);
   const std::string path = make_dirs(devfs_root, {"/bus", "/usb", bus_dir}) + node;
   return write_text(path, "") ? path : "";
+}
+
+bool add_video_node(const std::string& sysfs_root, const std::string& device,
+                    const std::string& interface, int number) {
+  const std::string target = sysfs_root + "/bus/usb/devices/" + device + "/" + interface;
+  ::mkdir(target.c_str(), 0755);
+  const std::string node =
+      make_dirs(sysfs_root, {"/class", "/video4linux"}) + "/video" + std::to_string(number);
+  ::mkdir(node.c_str(), 0755);
+  return ::symlink(target.c_str(), (node + "/device").c_str()) == 0;
 }
 
 }  // namespace rgbdtam::testing

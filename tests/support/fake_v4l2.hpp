@@ -52,6 +52,10 @@ class FakeV4l2 : public V4l2Io {
     bool wedged = false;  // delivers nothing until opened again
     int opens = 0;
     std::vector<std::vector<uint8_t>> jpeg;  // MJPEG: a frame's fill picks one of these
+    std::vector<uint32_t> also_offers;       // VIDIOC_ENUM_FMT: fourcc first, then these
+    bool metadata = false;                   // a UVC metadata node (no video capture)
+    int qbuf_failures = 0;                   // the next VIDIOC_QBUFs fail with EIO
+    bool qbuf_broken = false;                // every VIDIOC_QBUF fails until opened again
   };
   static constexpr size_t kMjpegBufferBytes = 1 << 16;
   std::vector<Node> nodes;
@@ -61,7 +65,7 @@ class FakeV4l2 : public V4l2Io {
   int64_t now_ns = 0;
 
   Node& add(const std::string& path, uint32_t fourcc) {
-    nodes.push_back({path, fourcc, {}, {}, {}, false, false, 0, {}});
+    nodes.push_back({path, fourcc, {}, {}, {}, false, false, 0, {}, {}, false, 0, false});
     return nodes.back();
   }
   static size_t buffer_bytes(const Node& n) {
@@ -76,6 +80,7 @@ class FakeV4l2 : public V4l2Io {
       if (nodes[i].path == path) {
         nodes[i].open = true;
         nodes[i].wedged = false;
+        nodes[i].qbuf_broken = false;
         ++nodes[i].opens;
         return static_cast<int>(i) + 3;
       }
@@ -98,7 +103,15 @@ class FakeV4l2 : public V4l2Io {
     switch (request) {
       case VIDIOC_QUERYCAP: {
         auto* cap = static_cast<v4l2_capability*>(arg);
-        cap->capabilities = V4L2_CAP_VIDEO_CAPTURE | V4L2_CAP_STREAMING;
+        cap->device_caps =
+            (n->metadata ? V4L2_CAP_META_CAPTURE : V4L2_CAP_VIDEO_CAPTURE) | V4L2_CAP_STREAMING;
+        cap->capabilities = cap->device_caps | V4L2_CAP_DEVICE_CAPS;
+        return 0;
+      }
+      case VIDIOC_ENUM_FMT: {
+        auto* f = static_cast<v4l2_fmtdesc*>(arg);
+        if (n->metadata || f->index > n->also_offers.size()) return fail(EINVAL);
+        f->pixelformat = f->index == 0 ? n->fourcc : n->also_offers[f->index - 1];
         return 0;
       }
       case VIDIOC_S_FMT: {
@@ -122,6 +135,11 @@ class FakeV4l2 : public V4l2Io {
         return 0;
       }
       case VIDIOC_QBUF:
+        if (n->qbuf_broken) return fail(EIO);
+        if (n->qbuf_failures > 0) {
+          --n->qbuf_failures;
+          return fail(EIO);
+        }
         n->queued.push_back(static_cast<int>(static_cast<v4l2_buffer*>(arg)->index));
         return 0;
       case VIDIOC_STREAMON:

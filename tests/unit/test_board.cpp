@@ -148,6 +148,8 @@ TEST(Board, BadBoardsAreClearErrors) {
   expect_error(testing::with_changes(kMinimal, "sensor.usb_id = kinect\n"),
                "sensor.usb_id 'kinect'");
   expect_error(testing::with_changes(kMinimal, "sensor.depth = metric\n"), "sensor.depth 'metric'");
+  expect_error(testing::with_changes(kMinimal, "sensor.kind = v4l2\nsensor.device = usb\n"),
+               "sensor.device = usb finds the camera's nodes by its USB id: set sensor.usb_id");
   expect_error(testing::with_changes(kMinimal, "origin.latitude_deg = 47.4\n"),
                "origin.latitude_deg and origin.longitude_deg go together");
   expect_error(testing::with_changes(kMinimal, "origin.latitude_deg = 91\n"), "out of range");

@@ -12,6 +12,7 @@
 #include "fake_usb.hpp"
 #include "fake_v4l2.hpp"
 #include "rgbdtam/hal/sensor_recovery.hpp"
+#include "rgbdtam/hal/v4l2_nodes.hpp"
 #include "rgbdtam/hal/v4l2_source.hpp"
 #include "test_paths.hpp"
 #include "tum_writer.hpp"
@@ -248,6 +249,146 @@ TEST(V4l2, NoFramesIsATimeoutAndAMissingNodeIsNamed) {
   EXPECT_NE(std::string(m.message()).find("/dev/video7"), std::string::npos);
 }
 
+// A RealSense D435 (8086:0b07) as uvcvideo presents it: depth (Z16), infrared (GREY, Y8I, Y12I)
+// and colour (YUYV) on interfaces of their own, each followed by its metadata node; a webcam
+// enumerated before it takes the low numbers.
+struct D435Rig {
+  FakeV4l2 io;
+  std::string sysfs = testing::make_temp_dir("sysfs_d435");
+  std::string devfs = testing::make_temp_dir("devfs_d435");
+  FakeV4l2::Node* depth = nullptr;
+  FakeV4l2::Node* colour = nullptr;
+  D435Rig() {
+    io.nodes.reserve(8);
+    io.now_ns = 900 * kMs;
+    EXPECT_TRUE(testing::add_usb_device(sysfs, "1-1", "046d", "0825", 1, 2));
+    EXPECT_TRUE(testing::add_usb_device(sysfs, "2-1", "8086", "0b07", 2, 3));
+    node("1-1", "1-1:1.0", 0, V4L2_PIX_FMT_YUYV, {V4L2_PIX_FMT_MJPEG});
+    node("1-1", "1-1:1.0", 1, 0, {});
+    depth = node("2-1", "2-1:1.0", 2, V4L2_PIX_FMT_Z16, {});
+    node("2-1", "2-1:1.0", 3, 0, {});
+    node("2-1", "2-1:1.1", 4, V4L2_PIX_FMT_GREY,
+         {v4l2_fourcc('Y', '8', 'I', ' '), v4l2_fourcc('Y', '1', '2', 'I')});
+    node("2-1", "2-1:1.1", 5, 0, {});
+    colour = node("2-1", "2-1:1.3", 6, V4L2_PIX_FMT_YUYV, {});
+    node("2-1", "2-1:1.3", 7, 0, {});
+  }
+  // fourcc 0: a metadata node.
+  FakeV4l2::Node* node(const char* device, const char* interface, int number, uint32_t fourcc,
+                       std::vector<uint32_t> also) {
+    EXPECT_TRUE(testing::add_video_node(sysfs, device, interface, number));
+    FakeV4l2::Node& n = io.add(devfs + "/video" + std::to_string(number), fourcc);
+    n.metadata = fourcc == 0;
+    n.also_offers = std::move(also);
+    return &n;
+  }
+};
+
+TEST(V4l2Nodes, AD435sDepthAndColourAreFoundByUsbIdAndWhatTheyOfferNotByNumber) {
+  D435Rig rig;
+  V4l2NodeFinder finder;
+  V4l2Nodes nodes;
+  const Status s = finder.find(&rig.io, rig.sysfs.c_str(), rig.devfs.c_str(), {0x8086, 0x0b07},
+                               V4L2_PIX_FMT_YUYV, &nodes);
+  ASSERT_TRUE(s.is_ok()) << s.message();
+  EXPECT_EQ(std::string(nodes.depth), rig.devfs + "/video2");
+  EXPECT_EQ(std::string(nodes.colour), rig.devfs + "/video6") << "not the webcam's video0";
+  EXPECT_EQ(std::string(nodes.depth_metadata), rig.devfs + "/video3");
+  EXPECT_EQ(std::string(nodes.colour_metadata), rig.devfs + "/video7");
+  for (const FakeV4l2::Node& n : rig.io.nodes) EXPECT_FALSE(n.open) << n.path << " left open";
+
+  // Frames flow from the nodes found.
+  V4l2Source source;
+  source.locate_by_usb({0x8086, 0x0b07}, rig.sysfs.c_str(), rig.devfs.c_str());
+  ASSERT_TRUE(source.open(&rig.io, "", "", kW, kH, 10 * kMs, 500).is_ok());
+  rig.depth->script = {frame(1000, 1)};
+  rig.colour->script = {frame(1003, 2)};
+  SensorFrame f;
+  Status warning;
+  ASSERT_TRUE(source.next(&f, &warning).is_ok());
+  EXPECT_EQ(f.depth[0], 100);
+  EXPECT_EQ(f.gray[0], 2);
+}
+
+TEST(V4l2Nodes, WhatIsMissingIsNamedWithWhatTheCameraOffers) {
+  D435Rig rig;
+  V4l2NodeFinder finder;
+  V4l2Nodes nodes;
+  Status s = finder.find(&rig.io, rig.sysfs.c_str(), rig.devfs.c_str(), {0x8086, 0x0b07},
+                         V4L2_PIX_FMT_MJPEG, &nodes);
+  ASSERT_FALSE(s.is_ok());
+  EXPECT_EQ(std::string(s.message()),
+            "USB 8086:0b07 has no MJPG node (its nodes: video2 Z16, video3 metadata, video4 GREY "
+            "Y8I Y12I, video5 metadata, video6 YUYV, video7 metadata)");
+  s = finder.find(&rig.io, rig.sysfs.c_str(), rig.devfs.c_str(), {0x2bc5, 0x0401},
+                  V4L2_PIX_FMT_YUYV, &nodes);
+  ASSERT_FALSE(s.is_ok());
+  EXPECT_NE(std::string(s.message()).find("USB 2bc5:0401 has no video node"), std::string::npos)
+      << s.message();
+}
+
+TEST(V4l2Nodes, AResetThatRenumbersTheNodesIsFollowedAtTheReopen) {
+  D435Rig rig;
+  V4l2Source source;
+  source.locate_by_usb({0x8086, 0x0b07}, rig.sysfs.c_str(), rig.devfs.c_str());
+  ASSERT_TRUE(source.open(&rig.io, "", "", kW, kH, 10 * kMs, 500).is_ok());
+  EXPECT_EQ(std::string(source.nodes().depth), rig.devfs + "/video2");
+  source.close();
+  // Re-enumerated after a reset: the camera's nodes now start at video8.
+  const std::string renumbered = testing::make_temp_dir("sysfs_d435_again");
+  EXPECT_TRUE(testing::add_usb_device(renumbered, "2-1", "8086", "0b07", 2, 4));
+  const int interface_of[] = {0, 0, 1, 1, 3, 3};
+  for (int i = 0; i < 6; ++i) {
+    EXPECT_TRUE(testing::add_video_node(renumbered, "2-1",
+                                        "2-1:1." + std::to_string(interface_of[i]), 8 + i));
+    rig.io.nodes[2 + i].path = rig.devfs + "/video" + std::to_string(8 + i);
+  }
+  V4l2Source again;
+  again.locate_by_usb({0x8086, 0x0b07}, renumbered.c_str(), rig.devfs.c_str());
+  ASSERT_TRUE(again.open(&rig.io, "", "", kW, kH, 10 * kMs, 500).is_ok());
+  EXPECT_EQ(std::string(again.nodes().depth), rig.devfs + "/video8");
+  EXPECT_EQ(std::string(again.nodes().colour), rig.devfs + "/video12");
+}
+
+TEST(V4l2, ARefusedRequeueIsQueuedAgainAndNoBufferIsLost) {
+  Rig rig;
+  ASSERT_TRUE(rig.open().is_ok());
+  constexpr int kFrames = 10;  // more than the driver's buffers
+  for (int i = 0; i < kFrames; ++i) {
+    rig.depth->script.push_back(frame(1000 + 33 * i, static_cast<uint8_t>(i)));
+    rig.colour->script.push_back(frame(1000 + 33 * i, static_cast<uint8_t>(i)));
+  }
+  rig.depth->qbuf_failures = 2;  // the first two frames' depth buffers are refused once
+  for (int i = 0; i < kFrames; ++i) {
+    SensorFrame f;
+    Status warning;
+    const Status s = rig.source.next(&f, &warning);
+    ASSERT_TRUE(s.is_ok()) << i << ": " << s.message();
+    EXPECT_EQ(f.timestamp_ns, (1000 + 33 * i) * kMs);
+  }
+  EXPECT_EQ(rig.source.counters().requeue_failures, 2u);
+  EXPECT_EQ(rig.depth->queued.size(), 3u) << "every buffer is back with the driver";
+}
+
+TEST(V4l2, TheDepthToColourStampOffsetIsMeasured) {
+  Rig rig;
+  ASSERT_TRUE(rig.open().is_ok());
+  const int offsets_ms[] = {-4, 2, 5, 1};
+  for (int i = 0; i < 4; ++i) {
+    rig.depth->script.push_back(frame(1000 + 33 * i + offsets_ms[i], 1));
+    rig.colour->script.push_back(frame(1000 + 33 * i, 2));
+  }
+  for (int i = 0; i < 4; ++i) {
+    SensorFrame f;
+    Status warning;
+    ASSERT_TRUE(rig.source.next(&f, &warning).is_ok());
+  }
+  const V4l2Counters& c = rig.source.counters();
+  EXPECT_EQ(c.pair_offset_min_ns, -4 * kMs);
+  EXPECT_EQ(c.pair_offset_max_ns, 5 * kMs);
+  EXPECT_DOUBLE_EQ(c.mean_pair_offset_ns(), 1.0 * kMs);
+}
+
 // Stall recovery on the fake's simulated clock: sleeping moves it forward.
 FakeV4l2* g_clock = nullptr;
 int64_t fake_now() { return g_clock->now_ns; }
@@ -308,6 +449,31 @@ TEST(V4l2Recovery, AWedgedStreamIsResetAndReopenedAndFramesFlowAgain) {
   EXPECT_EQ(c.last_recovery_ns, 2000 * kMs) << "from the last frame to the first one after";
   EXPECT_EQ(rig.depth->opens, 2);
   EXPECT_EQ(rig.depth->queued.size(), 3u) << "the reopened stream has all its buffers";
+}
+
+TEST(V4l2Recovery, AStreamThatRefusesEveryRequeueRunsDryAndIsReopened) {
+  RecoveryRig rig;
+  ASSERT_TRUE(rig.open().is_ok());
+  ASSERT_TRUE(rig.recovery.start(ThreadPlacement()).is_ok());
+  for (int i = 0; i < 90; ++i) {  // 3 s of frames
+    rig.depth->script.push_back(frame(1000 + 33 * i, 1));
+    rig.colour->script.push_back(frame(1000 + 33 * i, 2));
+  }
+  SensorFrame f;
+  ASSERT_TRUE(rig.until_frame(1, &f).empty());
+  rig.depth->qbuf_broken = true;  // the driver takes no buffer back until the stream restarts
+  int frames = 0;
+  for (int i = 0; i < 200 && rig.recovery.counters().recoveries == 0; ++i) {
+    Status warning;
+    frames += rig.recovery.next(&f, &warning).is_ok() ? 1 : 0;
+  }
+  const RecoveryCounters& c = rig.recovery.counters();
+  EXPECT_EQ(c.stalls, 1u);
+  EXPECT_EQ(c.reopens, 1u);
+  ASSERT_EQ(c.recoveries, 1u) << "frames flow again after the reopen";
+  EXPECT_EQ(frames, 4) << "the three buffers refused in turn, then the frame after the reopen";
+  EXPECT_GE(rig.source.counters().requeue_failures, 3u);
+  EXPECT_EQ(rig.depth->opens, 2);
 }
 
 TEST(V4l2Recovery, AnUnpluggedSensorIsRetriedAtABoundedPaceUntilItIsBack) {
