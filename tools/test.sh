@@ -3,7 +3,8 @@
 # sequence exists) and the live page in headless Chromium, host debug build under
 # ASan+UBSan with the shared-library sensor backends, each board's own firmware
 # build (the Raspberry Pi 4's static one runs the whole aarch64 suite under qemu-user through
-# the HIL runner's stand-in transport; the ROCK 5B's dynamic OpenNI2 one runs what qemu can),
+# the HIL runner's stand-in transport; the Raspberry Pi 5's static V4L2 one and the ROCK 5B's
+# dynamic OpenNI2 one run their board and firmware tests),
 # and a short fuzzing run of every parser. The slow full-sequence tests are left to the release
 # build.
 set -euo pipefail
@@ -16,7 +17,8 @@ logs=$(mktemp -d)
 # the two aarch64 boards are tuned for different cores (-mcpu), so they share no object.
 echo "=== configure every preset ($(date +%T))"
 pids=()
-for preset in host-release host-debug aarch64-raspberry-pi-4 aarch64-radxa-rock-5b; do
+for preset in host-release host-debug aarch64-raspberry-pi-4 aarch64-raspberry-pi-5 \
+  aarch64-radxa-rock-5b; do
   cmake --preset "$preset" >"$logs/configure-$preset.log" 2>&1 &
   pids+=($!)
 done
@@ -84,6 +86,13 @@ file build/aarch64-raspberry-pi-4/bin/rgbdtam | grep -q "ARM aarch64.*statically
 # the next build (it is mostly waiting on one core).
 tools/hil/ssh_loopback_check.sh raspberry-pi-4 >"$logs/ssh.log" 2>&1 &
 ssh_check=$!
+# Raspberry Pi 5: static, a RealSense D435 over V4L2. The code its suite would run is the Pi 4's
+# but for -mcpu (the whole suite runs under qemu above), so qemu runs its board and firmware
+# tests: the whole suite again would take CI past its time.
+build aarch64-raspberry-pi-5 rgbdtam
+check aarch64-raspberry-pi-5 -R '^(BoardBuild|Firmware)\.'
+file build/aarch64-raspberry-pi-5/bin/rgbdtam | grep -q "ARM aarch64.*statically linked" \
+  || { echo "the Raspberry Pi 5's rgbdtam is not a static ARM binary" >&2; exit 1; }
 # Radxa ROCK 5B: dynamic for OpenNI2's driver plugins. qemu runs its board and firmware tests;
 # OpenNI2's initialise hangs under qemu-user, so the Xtion itself is a hardware test.
 build aarch64-radxa-rock-5b rgbdtam
@@ -95,7 +104,7 @@ $ssh_ok || exit 1
 echo "=== fuzz: every parser, briefly ($(date +%T))"
 tools/fuzz.sh 5
 echo "=== each board's firmware"
-for board in host-emulation raspberry-pi-4 radxa-rock-5b; do
+for board in host-emulation raspberry-pi-4 raspberry-pi-5 radxa-rock-5b; do
   preset=$(sed -n 's/^build\.preset *= *//p' "board/$board/board.conf")
   dir=build
   [ "$preset" = host-release ] || dir=build/$preset

@@ -27,7 +27,8 @@ Status load(const std::string& dir, Board* b) {
 }
 
 TEST(Board, ShippedBoardsLoadAndValidate) {
-  for (const char* name : {"host-emulation", "raspberry-pi-4", "radxa-rock-5b"}) {
+  for (const char* name :
+       {"host-emulation", "raspberry-pi-4", "raspberry-pi-5", "radxa-rock-5b"}) {
     Board b;
     const Status s = load(testing::source_path(std::string("board/") + name), &b);
     ASSERT_TRUE(s.is_ok()) << s.message();
