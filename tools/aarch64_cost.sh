@@ -9,6 +9,9 @@
 #   tools/aarch64_cost.sh <sequence-dir> [config] [frames] [aarch64-build-dir]
 # Builds first: build/bin/rgbdtam (host-release) and the aarch64 one (preset aarch64, in
 # build/aarch64, or a board's, e.g. build/aarch64-raspberry-pi-4 with -mcpu=cortex-a72).
+# The modelled core: RGBDTAM_MCA_CPU (llvm-mca's -mcpu, default cortex-a72) at RGBDTAM_MCA_GHZ
+# (default 1.5), e.g. cortex-a76 at 2.4 for a Raspberry Pi 5. RGBDTAM_COST_PART=modules runs
+# only the per-module cycle model (the second half).
 # Mapping and loop closure are off, so that only the tracker runs the counted functions; the
 # count is the difference between a run of 2 + frames frames and one of 2 (init cancels out).
 set -euo pipefail
@@ -22,6 +25,9 @@ for b in "$host" "$arm"; do [ -x "$b" ] || { echo "build $b first" >&2; exit 1; 
 command -v qemu-aarch64 >/dev/null || { echo "qemu-aarch64 missing: tools/setup.sh --aarch64" >&2; exit 1; }
 command -v valgrind >/dev/null || { echo "valgrind missing: tools/setup.sh --cost" >&2; exit 1; }
 sysroot=/usr/aarch64-linux-gnu
+mca_cpu=${RGBDTAM_MCA_CPU:-cortex-a72}
+ghz=${RGBDTAM_MCA_GHZ:-1.5}
+part=${RGBDTAM_COST_PART:-all}
 # The tracking path's functions (the classes and the kernels of tracker.cpp and pyramid.cpp).
 pattern='rgbdtam::(Tracker::|TrackingPipeline::|KeyframeBuilder::|CannyDetector::|FramePyramid::|Undistorter::|count_surface_pixels|compute_gradients|compute_depth_gradients|\(anonymous namespace\)::(add_normal_equations|project_points|geometric_residuals|weigh_rows|sum_padded|dot_lanes|downsample_gray|downsample_inverse_depth|central_differences))'
 args=(replay "$(realpath "$seq")" --config "$(realpath "$config")" --quiet
@@ -42,6 +48,7 @@ host_count() {
   callgrind_annotate --threshold=100 "$work/cg.$1" 2>/dev/null | grep -E "$pattern" |
     awk '{gsub(",", "", $1); s += $1} END {printf "%.0f\n", s}'
 }
+if [ "$part" = all ]; then
 a0=$(arm_count 2); a1=$(arm_count $((2 + frames)))
 h0=$(host_count 2); h1=$(host_count $((2 + frames)))
 # The host's rate and time distribution on the default configuration (pose path only).
@@ -54,16 +61,17 @@ json=$("$host" "${full[@]}" --json 2>/dev/null)
 field() { printf '%s' "$json" | sed -E "s/.*\"$1\": ([0-9.]+).*/\1/"; }
 awk -v a="$((a1 - a0))" -v h="$((h1 - h0))" -v n="$frames" -v path="$path" \
     -v mean="$(field track_mean_ms)" -v median="$(field track_median_ms)" \
-    -v p95="$(field track_p95_ms)" 'BEGIN {
+    -v p95="$(field track_p95_ms)" -v cpu="$mca_cpu" -v ghz="$ghz" 'BEGIN {
   ratio = a / h
   printf "tracking functions, %d frames: aarch64 %.1f M instructions per frame, x86-64 %.1f M (ratio %.2f)\n", n, a / n / 1e6, h / n / 1e6, ratio
   rate = path / 200 / (mean * 1e-3)
   printf "host, first 200 frames: %.1f M instructions per frame on the pose path, mean %.2f ms: %.2f G instructions/s; median %.2f ms, p95 %.2f ms\n", path / 200 / 1e6, mean, rate / 1e9, median, p95
   for (ipc = 1.0; ipc <= 1.51; ipc += 0.25) {
-    s = ratio * rate / (ipc * 1.5e9)
-    printf "Cortex-A72 1.5 GHz at IPC %.2f: median %.1f ms, p95 %.1f ms per frame\n", ipc, median * s, p95 * s
+    s = ratio * rate / (ipc * ghz * 1e9)
+    printf "%s %.1f GHz at IPC %.2f: median %.1f ms, p95 %.1f ms per frame\n", cpu, ghz, ipc, median * s, p95 * s
   }
 }'
+fi
 
 # The cycle model, per module. Every translated block qemu ran goes through llvm-mca's Cortex-A72
 # scheduling model (the block's steady state when repeated, every load hitting L1 and every
@@ -80,6 +88,7 @@ module_args=(replay "$(realpath "$seq")" --config "$(realpath "$config")" --quie
              --set map.threaded=false --set loop.threaded=false)
 entries=$(paste -d' ' <(nm "$arm" | awk '{print $NF}') <(nm -C "$arm" | cut -d' ' -f3-) | awk '
   / rgbdtam::TrackingPipeline::process\(/ {print $1 "=tracker"}
+  / rgbdtam::DepthInColour::apply\(/ {print $1 "=tracker"}
   / rgbdtam::KeyframeBuildTask::step\(/ {print $1 "=builder"}
   / rgbdtam::MappingModule::(step|finish)\(/ {print $1 "=mapper"}
   / rgbdtam::LoopModule::step\(/ {print $1 "=loop"}
@@ -115,10 +124,10 @@ module_cycles() {  # $1: frames; prints "<module> <cycles> <instructions>" lines
         for (i = 3; i <= NF; i++) { w = $i
           printf "0x%s 0x%s 0x%s 0x%s\n", substr(w, 7, 2), substr(w, 5, 2), substr(w, 3, 2), substr(w, 1, 2) }}
        END {print "0x60 0xa8 0x29 0xd4"}' "$work/tb" |
-    llvm-mc --disassemble -triple=aarch64 -mcpu=cortex-a72 /dev/stdin 2>/dev/null |
+    llvm-mc --disassemble -triple=aarch64 -mcpu="$mca_cpu" /dev/stdin 2>/dev/null |
     awk '/brk\t#0x4d43/ {if (n) print "# LLVM-MCA-END"; n++; print "# LLVM-MCA-BEGIN tb" n; next}
          /\.text/ {next} {print}' | sed '$d' > "$work/tb.s"
-  llvm-mca -mtriple=aarch64 -mcpu=cortex-a72 -iterations=100 "$work/tb.s" 2>/dev/null |
+  llvm-mca -mtriple=aarch64 -mcpu="$mca_cpu" -iterations=100 "$work/tb.s" 2>/dev/null |
     awk '/Code Region - tb/ {id = substr($NF, 3)} /^Total Cycles:/ {print id, $3 / 100}' > "$work/cycles"
   awk -v by_function="$work/fn.$1" '
        FILENAME == ARGV[1] {c[$1] = $2; next} FILENAME == ARGV[2] {size[FNR] = $1; sym[FNR] = $2; next}
@@ -136,20 +145,20 @@ for run in 1 2 3; do  # each module's host time over frames 3 .. 2 + frames, in 
            END {printf "tracker %.3f\nbuilder %.3f\nmapper %.3f\nloop %.3f\n", t / 1e6, b / 1e6, m / 1e6, l / 1e6}' \
     "$work/trace"
 done > "$work/host"
-awk -v f="$frames" 'FILENAME == ARGV[1] {c0[$1] = $2; n0[$1] = $3; next}
+awk -v f="$frames" -v cpu="$mca_cpu" -v ghz="$ghz" 'FILENAME == ARGV[1] {c0[$1] = $2; n0[$1] = $3; next}
      FILENAME == ARGV[2] {c1[$1] = $2; n1[$1] = $3; next}
      !($1 in host) || $2 < host[$1] {host[$1] = $2}
      END {
   k = c1["keyframes"] - c0["keyframes"]
-  printf "cycle model, A72 at 1.5 GHz, %d frames, %d keyframes (lower bounds; host: this machine over the same frames):\n", f, k
+  printf "cycle model, %s at %.1f GHz, %d frames, %d keyframes (lower bounds; host: this machine over the same frames):\n", cpu, ghz, f, k
   split("tracker builder mapper loop", order, " ")
   for (i = 1; i <= 4; i++) {
     m = order[i]; c = c1[m] - c0[m]; n = n1[m] - n0[m]
     per = (m == "tracker") ? f : k; unit = (m == "tracker") ? "frame" : "keyframe"
     if (per <= 0 || c <= 0) continue
-    a72 = c / per / 1.5e6; h = host[m] / per
-    printf "  %-8s %7.1f M cycles per %s (%.1f M instructions, IPC %.2f): %6.1f ms; host %5.2f ms, ratio %.2f\n", m, c / per / 1e6, unit, n / per / 1e6, n / c, a72, h, a72 / h
-    scale = scale sprintf("%s%s=%.2f", (scale == "" ? "" : ","), m, a72 / h)
+    board_ms = c / per / (ghz * 1e6); h = host[m] / per
+    printf "  %-8s %7.1f M cycles per %s (%.1f M instructions, IPC %.2f): %6.1f ms; host %5.2f ms, ratio %.2f\n", m, c / per / 1e6, unit, n / per / 1e6, n / c, board_ms, h, board_ms / h
+    scale = scale sprintf("%s%s=%.2f", (scale == "" ? "" : ","), m, board_ms / h)
   }
   printf "tools/task_sim.py --scale %s\n", scale
 }' "$work/m0" "$work/m1" "$work/host"

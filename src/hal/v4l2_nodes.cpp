@@ -32,7 +32,7 @@ bool read_hex(const char* path, uint16_t* value) {
 // The node's USB interface (resolved) and its device's id; false when the node is no USB
 // device's (a platform camera) or the path is too long to keep.
 bool usb_interface_of(const char* sysfs_root, int number, char* interface, size_t size, UsbId* id) {
-  char path[PATH_MAX], resolved[PATH_MAX];
+  char path[PATH_MAX + 16], resolved[PATH_MAX];
   std::snprintf(path, sizeof(path), "%s/class/video4linux/video%d/device", sysfs_root, number);
   if (::realpath(path, resolved) == nullptr || std::strlen(resolved) >= size) return false;
   std::memcpy(interface, resolved, std::strlen(resolved) + 1);
