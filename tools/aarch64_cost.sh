@@ -10,8 +10,11 @@
 # Builds first: build/bin/rgbdtam (host-release) and the aarch64 one (preset aarch64, in
 # build/aarch64, or a board's, e.g. build/aarch64-raspberry-pi-4 with -mcpu=cortex-a72).
 # The modelled core: RGBDTAM_MCA_CPU (llvm-mca's -mcpu, default cortex-a72) at RGBDTAM_MCA_GHZ
-# (default 1.5), e.g. cortex-a76 at 2.4 for a Raspberry Pi 5. RGBDTAM_COST_PART=modules runs
-# only the per-module cycle model (the second half).
+# (default 1.5) with the llvm-mca RGBDTAM_MCA (default llvm-mca). LLVM schedules the Cortex-A72
+# and the Cortex-A76 with one model, the Cortex-A57's; the Neoverse N1, the A76's server
+# version (same core), has its own from LLVM 16: so a Raspberry Pi 5 is
+# RGBDTAM_MCA=llvm-mca-19 RGBDTAM_MCA_CPU=neoverse-n1 RGBDTAM_MCA_GHZ=2.4.
+# RGBDTAM_COST_PART=modules runs only the per-module cycle model (the second half).
 # Mapping and loop closure are off, so that only the tracker runs the counted functions; the
 # count is the difference between a run of 2 + frames frames and one of 2 (init cancels out).
 set -euo pipefail
@@ -25,6 +28,10 @@ for b in "$host" "$arm"; do [ -x "$b" ] || { echo "build $b first" >&2; exit 1; 
 command -v qemu-aarch64 >/dev/null || { echo "qemu-aarch64 missing: tools/setup.sh --aarch64" >&2; exit 1; }
 command -v valgrind >/dev/null || { echo "valgrind missing: tools/setup.sh --cost" >&2; exit 1; }
 sysroot=/usr/aarch64-linux-gnu
+mca=${RGBDTAM_MCA:-llvm-mca}
+mca_flags=()  # a newer llvm-mca stops at an instruction its model lacks (an LSE atomic): skip it
+"$mca" --help 2>/dev/null | grep -q skip-unsupported-instructions &&
+  mca_flags=(-skip-unsupported-instructions=lack-sched)
 mca_cpu=${RGBDTAM_MCA_CPU:-cortex-a72}
 ghz=${RGBDTAM_MCA_GHZ:-1.5}
 part=${RGBDTAM_COST_PART:-all}
@@ -82,7 +89,7 @@ fi
 # of 2 leaves init out. The PNG decoder (libpng, zlib) is left out of the logs (a third of their
 # volume; the sensor's cost is not modelled). Each module's host time over the same frames (the
 # least of three traced replays) gives its A72 ratio, what tools/task_sim.py --scale takes.
-command -v llvm-mca >/dev/null && command -v llvm-mc >/dev/null ||
+command -v "$mca" >/dev/null && command -v llvm-mc >/dev/null ||
   { echo "llvm-mca missing: tools/setup.sh --cost" >&2; exit 1; }
 module_args=(replay "$(realpath "$seq")" --config "$(realpath "$config")" --quiet
              --set map.threaded=false --set loop.threaded=false)
@@ -127,7 +134,7 @@ module_cycles() {  # $1: frames; prints "<module> <cycles> <instructions>" lines
     llvm-mc --disassemble -triple=aarch64 -mcpu="$mca_cpu" /dev/stdin 2>/dev/null |
     awk '/brk\t#0x4d43/ {if (n) print "# LLVM-MCA-END"; n++; print "# LLVM-MCA-BEGIN tb" n; next}
          /\.text/ {next} {print}' | sed '$d' > "$work/tb.s"
-  llvm-mca -mtriple=aarch64 -mcpu="$mca_cpu" -iterations=100 "$work/tb.s" 2>/dev/null |
+  "$mca" -mtriple=aarch64 -mcpu="$mca_cpu" "${mca_flags[@]}" -iterations=100 "$work/tb.s" 2>/dev/null |
     awk '/Code Region - tb/ {id = substr($NF, 3)} /^Total Cycles:/ {print id, $3 / 100}' > "$work/cycles"
   awk -v by_function="$work/fn.$1" '
        FILENAME == ARGV[1] {c[$1] = $2; next} FILENAME == ARGV[2] {size[FNR] = $1; sym[FNR] = $2; next}

@@ -46,7 +46,7 @@ packages=(build-essential cmake ninja-build libeigen3-dev libpng-dev zlib1g-dev 
 command -v node >/dev/null && command -v npm >/dev/null || packages+=(nodejs npm)
 if $aarch64; then packages+=(g++-aarch64-linux-gnu qemu-user); fi
 if $fuzz; then packages+=(clang); fi  # libFuzzer ships with Debian's clang
-if $cost; then packages+=(valgrind llvm); fi
+if $cost; then packages+=(valgrind llvm llvm-19); fi
 # rgbdtam-vs-opencv (the dynamic build's host benchmark) compares with OpenCV's RgbdOdometry.
 if $opencv; then packages+=(libopencv-dev libopencv-contrib-dev); fi
 if $browser; then packages+=(chromium openssh-server openssh-client); fi
