@@ -12,11 +12,16 @@ constexpr uint16_t kEmpty = 0xFFFF;  // the z-buffer's "nothing yet"; 0 (a hole)
 // A source pixel covering more target pixels than this across is not a surface (a corner
 // grazing the target's image plane); it is left out rather than painted over the image.
 constexpr float kMaxFootprintPx = 16.0f;
-// ceil() for x > -1 (x < INT_MAX): the library's is a call where SSE2 has no rounding
-// instruction, and this is every pixel's.
-int ceil_above_minus_one(float x) {
-  const int truncated = static_cast<int>(x);
-  return truncated < x ? truncated + 1 : truncated;
+// x within [lowest, highest]; NaN becomes lowest.
+Lanes clamp(Lanes x, float lowest, float highest) {
+  const Lanes above = x > lowest ? x : lowest;
+  return above < highest ? above : highest;
+}
+// ceil() for x > -1 (and far below INT_MAX): SSE2 has no rounding instruction, and GCC would
+// call the library's for every lane.
+IntLanes ceil_above_minus_one(Lanes x) {
+  const IntLanes truncated = __builtin_convertvector(x, IntLanes);
+  return truncated - (__builtin_convertvector(truncated, Lanes) < x);  // true is -1
 }
 
 // A point of the target's frame to its raw (distorted) pixel.
@@ -43,7 +48,9 @@ void DepthRegistration::init(const CameraModel& source, const CameraModel& targe
   for (auto* table : {&ray_x_, &ray_y_, &ray_z_, &half_width_, &half_height_}) {
     table->reset(new float[pixels]);
   }
-  for (auto* row : {&u_, &v_, &z_}) row->reset(new float[static_cast<size_t>(source_width_)]);
+  for (auto* row : {&x0_, &x1_, &y0_, &y1_, &raw_}) {
+    row->reset(new int32_t[static_cast<size_t>(source_width_)]);
+  }
   const PinholeIntrinsics& k = source.intrinsics;
   auto ray = [&](double x, double y) {
     double xn = 0, yn = 0;
@@ -85,6 +92,8 @@ void DepthRegistration::move_row(const uint16_t* depth, int y) {
   const float fy = static_cast<float>(target_.intrinsics.fy_px);
   const float cx = static_cast<float>(target_.intrinsics.cx_px);
   const float cy = static_cast<float>(target_.intrinsics.cy_px);
+  const float width = static_cast<float>(target_.intrinsics.width_px);
+  const float height = static_cast<float>(target_.intrinsics.height_px);
   const RadTanDistortion& d = target_.distortion;
   const float k1 = static_cast<float>(d.k1), k2 = static_cast<float>(d.k2);
   const float k3 = static_cast<float>(d.k3), p1 = static_cast<float>(d.p1);
@@ -93,52 +102,60 @@ void DepthRegistration::move_row(const uint16_t* depth, int y) {
   const float* rx = ray_x_.get() + base;
   const float* ry = ray_y_.get() + base;
   const float* rz = ray_z_.get() + base;
+  const float* half_u = half_width_.get() + base;
+  const float* half_v = half_height_.get() + base;
+  // Members in locals: the stores (memcpy) may alias anything, members would be reloaded.
+  const float inverse_factor = inverse_factor_, factor = factor_;
+  const float tx = t_[0], ty = t_[1], tz = t_[2];
+  int32_t *x0_row = x0_.get(), *x1_row = x1_.get(), *y0_row = y0_.get(), *y1_row = y1_.get();
+  int32_t* raw_row = raw_.get();
   // Four pixels at a time in one SSE2 or NEON register (GCC and Clang lower the arithmetic to
-  // either; widths are multiples of 8). No branch: a pixel without depth lands at the
-  // translation, which apply() skips by its depth.
+  // either; widths are multiples of 8), up to the integer bounds the scatter paints: no branch.
   for (int x = 0; x < source_width_; x += kLanes) {
     Lanes depth_m;
     for (int i = 0; i < kLanes; ++i) depth_m[i] = static_cast<float>(depth[x + i]);
-    depth_m *= inverse_factor_;
-    const Lanes px = depth_m * load_lanes(rx + x) + t_[0];
-    const Lanes py = depth_m * load_lanes(ry + x) + t_[1];
-    const Lanes pz = depth_m * load_lanes(rz + x) + t_[2];
+    const IntLanes measured = depth_m > 0.0f;
+    depth_m *= inverse_factor;
+    const Lanes px = depth_m * load_lanes(rx + x) + tx;
+    const Lanes py = depth_m * load_lanes(ry + x) + ty;
+    const Lanes pz = depth_m * load_lanes(rz + x) + tz;
     const Lanes inverse_z = 1.0f / pz;
     const Lanes xn = px * inverse_z, yn = py * inverse_z;
     const Lanes r2 = xn * xn + yn * yn;
     const Lanes radial = 1.0f + r2 * (k1 + r2 * (k2 + r2 * k3));
     const Lanes xd = xn * radial + 2.0f * p1 * xn * yn + p2 * (r2 + 2.0f * xn * xn);
     const Lanes yd = yn * radial + p1 * (r2 + 2.0f * yn * yn) + 2.0f * p2 * xn * yn;
-    store_lanes(fx * xd + cx, u_.get() + x);
-    store_lanes(fy * yd + cy, v_.get() + x);
-    store_lanes(pz, z_.get() + x);
+    const Lanes u = fx * xd + cx, v = fy * yd + cy;
+    const Lanes hu = load_lanes(half_u + x), hv = load_lanes(half_v + x);
+    // The target pixels whose centres lie in [u - hu, u + hu) x [v - hv, v + hv), within the
+    // image: clamped first, so that a square outside it (or NaN) bounds nothing.
+    const IntLanes x0 = ceil_above_minus_one(clamp(u - hu, -0.5f, width));
+    const IntLanes y0 = ceil_above_minus_one(clamp(v - hv, -0.5f, height));
+    const IntLanes x1 = ceil_above_minus_one(clamp(u + hu, -0.5f, width));
+    const IntLanes y1 = ceil_above_minus_one(clamp(v + hv, -0.5f, height));
+    // No depth, or behind the target: an empty bound.
+    const IntLanes paints = measured & (pz > 0.0f);
+    store_lanes(x0, x0_row + x);
+    store_lanes(paints ? x1 : x0, x1_row + x);
+    store_lanes(y0, y0_row + x);
+    store_lanes(y1, y1_row + x);
+    const Lanes raw = clamp(pz * factor + 0.5f, 0.0f, static_cast<float>(kEmpty - 1));
+    store_lanes(__builtin_convertvector(raw, IntLanes), raw_row + x);
   }
 }
 
 void DepthRegistration::apply(const uint16_t* source, uint16_t* out) {
   const int width = target_.intrinsics.width_px, height = target_.intrinsics.height_px;
   std::fill(out, out + static_cast<size_t>(width) * static_cast<size_t>(height), kEmpty);
+  const int32_t *x0_row = x0_.get(), *x1_row = x1_.get(), *y0_row = y0_.get();
+  const int32_t *y1_row = y1_.get(), *raw_row = raw_.get();
   for (int y = 0; y < source_height_; ++y) {
-    const size_t base = static_cast<size_t>(y) * static_cast<size_t>(source_width_);
-    const uint16_t* depth = source + base;
-    move_row(depth, y);
+    move_row(source + static_cast<size_t>(y) * static_cast<size_t>(source_width_), y);
     for (int x = 0; x < source_width_; ++x) {
-      const float z_m = z_[x];
-      if (depth[x] == 0 || !(z_m > 0.0f)) continue;
-      const float half_u = half_width_[base + static_cast<size_t>(x)];
-      const float half_v = half_height_[base + static_cast<size_t>(x)];
-      const float u0 = u_[x] - half_u, u1 = u_[x] + half_u;
-      const float v0 = v_[x] - half_v, v1 = v_[x] + half_v;
-      // Not NaN, and inside the image.
-      if (!(u1 > 0.0f && v1 > 0.0f && u0 < width && v0 < height)) continue;
-      // The target pixels whose centres lie in [u0, u1) x [v0, v1).
-      const int x0 = ceil_above_minus_one(std::max(u0, -0.5f));
-      const int x1 = std::min(width, ceil_above_minus_one(u1));
-      const int y0 = ceil_above_minus_one(std::max(v0, -0.5f));
-      const int y1 = std::min(height, ceil_above_minus_one(v1));
-      const float raw = std::min(z_m * factor_ + 0.5f, static_cast<float>(kEmpty - 1));
-      const uint16_t value = static_cast<uint16_t>(raw);
-      for (int ty = y0; ty < y1; ++ty) {
+      const int x0 = x0_row[x], x1 = x1_row[x];
+      if (x0 >= x1) continue;
+      const uint16_t value = static_cast<uint16_t>(raw_row[x]);
+      for (int ty = y0_row[x], y1 = y1_row[x]; ty < y1; ++ty) {
         uint16_t* row = out + static_cast<size_t>(ty) * static_cast<size_t>(width);
         for (int tx = x0; tx < x1; ++tx) row[tx] = std::min(row[tx], value);
       }

@@ -34,13 +34,13 @@ class DepthRegistration {
   void apply(const uint16_t* source, uint16_t* out);
   // What init allocates for a source of this size.
   static size_t bytes_needed(int source_width, int source_height) {
-    return sizeof(float) * (5 * static_cast<size_t>(source_width) * source_height +
-                            3 * static_cast<size_t>(source_width));
+    return sizeof(float) * 5 * static_cast<size_t>(source_width) * source_height +
+           sizeof(int32_t) * 5 * static_cast<size_t>(source_width);
   }
 
  private:
-  // The row's pixels at their depths moved into the target: u_, v_ their raw pixel, z_ their
-  // depth there.
+  // The row's pixels at their depths moved into the target: the target pixels each covers
+  // ([x0_, x1_) x [y0_, y1_), empty for a pixel without depth) and its raw depth there.
   void move_row(const uint16_t* depth, int y);
 
   CameraModel target_;
@@ -50,7 +50,7 @@ class DepthRegistration {
   // Per source pixel: its ray turned into the target's frame (z = 1 before turning), and the
   // half width and height of its square in the target's pixels.
   std::unique_ptr<float[]> ray_x_, ray_y_, ray_z_, half_width_, half_height_;
-  std::unique_ptr<float[]> u_, v_, z_;  // one row's
+  std::unique_ptr<int32_t[]> x0_, x1_, y0_, y1_, raw_;  // one row's
 };
 
 }  // namespace rgbdtam

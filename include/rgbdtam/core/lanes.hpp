@@ -2,6 +2,7 @@
 // Four floats, one SSE2 or NEON register: GCC and Clang lower the arithmetic on them to either,
 // for the per-pixel and per-point loops the vectoriser leaves scalar.
 
+#include <cstdint>
 #include <cstring>
 
 namespace rgbdtam {
@@ -16,5 +17,9 @@ inline Lanes load_lanes(const float* p) {
   return v;
 }
 inline void store_lanes(Lanes v, float* p) { std::memcpy(p, &v, sizeof(v)); }
+
+// Four int32s; a comparison of Lanes gives one (-1 where true, 0 where false).
+using IntLanes = int32_t __attribute__((vector_size(16)));
+inline void store_lanes(IntLanes v, int32_t* p) { std::memcpy(p, &v, sizeof(v)); }
 
 }  // namespace rgbdtam
