@@ -12,9 +12,8 @@
 #include <cstring>
 
 namespace rgbdtam {
-namespace {
-// A sysfs attribute holding one number in the given base.
-bool read_number(const char* path, int base, uint16_t* value) {
+
+bool read_sysfs_number(const char* path, int base, uint16_t* value) {
   const int fd = ::open(path, O_RDONLY | O_CLOEXEC);
   if (fd < 0) return false;
   char buf[16] = {};
@@ -27,7 +26,6 @@ bool read_number(const char* path, int base, uint16_t* value) {
   *value = static_cast<uint16_t>(v);
   return true;
 }
-}  // namespace
 
 bool parse_usb_id(const char* text, UsbId* id) {
   unsigned vendor = 0, product = 0;
@@ -57,9 +55,9 @@ Status for_each_usb_device(const char* sysfs_root, Visit visit) {
     UsbId id;
     std::snprintf(device, sizeof(device), "%s/%s", dir_path, e->d_name);
     std::snprintf(path, sizeof(path), "%s/idVendor", device);
-    if (!read_number(path, 16, &id.vendor)) continue;  // interfaces have no ids
+    if (!read_sysfs_number(path, 16, &id.vendor)) continue;  // interfaces have no ids
     std::snprintf(path, sizeof(path), "%s/idProduct", device);
-    if (!read_number(path, 16, &id.product)) continue;
+    if (!read_sysfs_number(path, 16, &id.product)) continue;
     if (!visit(device, id)) break;
   }
   ::closedir(dir);
@@ -81,9 +79,9 @@ Status reset_usb_device(const char* sysfs_root, const char* devfs_root, const Us
     if (d.vendor != id.vendor || d.product != id.product) return true;
     char path[640];
     std::snprintf(path, sizeof(path), "%s/busnum", device);
-    found = read_number(path, 10, &bus);
+    found = read_sysfs_number(path, 10, &bus);
     std::snprintf(path, sizeof(path), "%s/devnum", device);
-    found = found && read_number(path, 10, &address);
+    found = found && read_sysfs_number(path, 10, &address);
     return !found;
   }));
   if (!found) {

@@ -16,19 +16,6 @@
 namespace rgbdtam {
 namespace {
 
-bool read_hex(const char* path, uint16_t* value) {
-  const int fd = ::open(path, O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return false;
-  char text[16] = {};
-  const ssize_t n = ::read(fd, text, sizeof(text) - 1);
-  ::close(fd);
-  char* end = nullptr;
-  const unsigned long v = n > 0 ? std::strtoul(text, &end, 16) : 0;
-  if (n <= 0 || end == text || v > 0xFFFF) return false;
-  *value = static_cast<uint16_t>(v);
-  return true;
-}
-
 // The node's USB interface (resolved) and its device's id; false when the node is no USB
 // device's (a platform camera) or the path is too long to keep.
 bool usb_interface_of(const char* sysfs_root, int number, char* interface, size_t size, UsbId* id) {
@@ -38,9 +25,9 @@ bool usb_interface_of(const char* sysfs_root, int number, char* interface, size_
   std::memcpy(interface, resolved, std::strlen(resolved) + 1);
   // The interface's parent folder is the USB device.
   std::snprintf(path, sizeof(path), "%s/../idVendor", resolved);
-  if (!read_hex(path, &id->vendor)) return false;
+  if (!read_sysfs_number(path, 16, &id->vendor)) return false;
   std::snprintf(path, sizeof(path), "%s/../idProduct", resolved);
-  return read_hex(path, &id->product);
+  return read_sysfs_number(path, 16, &id->product);
 }
 
 // Appends to a bounded message, truncating.

@@ -3,8 +3,10 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include <cmath>
 #include <cstdio>
+
+#include "rgbdtam/core/se3.hpp"
+#include "rgbdtam/runtime/key_value.hpp"
 
 namespace rgbdtam {
 namespace {
@@ -29,17 +31,6 @@ CameraCalibration calibrate_one(const std::vector<std::vector<cv::Point3f>>& obj
   c.K = cv::Matx33d(K);
   for (int i = 0; i < 5; ++i) c.distortion[i] = distortion.at<double>(i);
   return c;
-}
-
-// The unit quaternion (w x y z) of a rotation matrix.
-cv::Vec4d quaternion(const cv::Matx33d& R) {
-  cv::Vec3d rvec;
-  cv::Rodrigues(R, rvec);
-  const double angle = cv::norm(rvec);
-  if (angle < 1e-12) return {1, 0, 0, 0};
-  const cv::Vec3d axis = rvec / angle;
-  const double s = std::sin(angle / 2);
-  return {std::cos(angle / 2), axis[0] * s, axis[1] * s, axis[2] * s};
 }
 
 }  // namespace
@@ -96,7 +87,14 @@ bool calibrate_rgbd(const std::vector<cv::Mat>& colour, const std::vector<cv::Ma
 
 std::string config_keys(const RgbdCalibration& c) {
   char text[2048];
-  const cv::Vec4d q = quaternion(c.R_c_d);
+  // The pose as the params file's parser reads it.
+  Matrix3d R;
+  for (int r = 0; r < 3; ++r) {
+    for (int k = 0; k < 3; ++k) R(r, k) = c.R_c_d(r, k);
+  }
+  const SE3 T_c_d(Eigen::Quaterniond(R), Vector3d(c.t_c_d[0], c.t_c_d[1], c.t_c_d[2]));
+  char pose[160];
+  print_pose_value(&T_c_d, pose, sizeof(pose));
   const CameraCalibration& k = c.colour;
   const CameraCalibration& d = c.depth;
   std::snprintf(
@@ -108,12 +106,12 @@ std::string config_keys(const RgbdCalibration& c) {
       "depth_camera.fx = %.3f\ndepth_camera.fy = %.3f\ndepth_camera.cx = %.3f\n"
       "depth_camera.cy = %.3f\ndepth_camera.k1 = %.6f\ndepth_camera.k2 = %.6f\n"
       "depth_camera.p1 = %.6f\ndepth_camera.p2 = %.6f\ndepth_camera.k3 = %.6f\n"
-      "depth_camera.T_c_d = %.8f %.8f %.8f %.8f %.6f %.6f %.6f\n"
+      "depth_camera.T_c_d = %s\n"
       "depth_camera.register = true\n",
       c.views, k.rms_px, d.rms_px, c.stereo_rms_px, k.K(0, 0), k.K(1, 1), k.K(0, 2), k.K(1, 2),
       k.distortion[0], k.distortion[1], k.distortion[2], k.distortion[3], k.distortion[4],
       d.K(0, 0), d.K(1, 1), d.K(0, 2), d.K(1, 2), d.distortion[0], d.distortion[1], d.distortion[2],
-      d.distortion[3], d.distortion[4], q[0], q[1], q[2], q[3], c.t_c_d[0], c.t_c_d[1], c.t_c_d[2]);
+      d.distortion[3], d.distortion[4], pose);
   return text;
 }
 

@@ -16,6 +16,10 @@ struct UsbId {
   uint16_t product = 0;
 };
 
+// A sysfs attribute holding one number in the given base (idVendor: 16, busnum: 10); false
+// when it is missing or not such a number.
+bool read_sysfs_number(const char* path, int base, uint16_t* value);
+
 // Parses "vvvv:pppp" (hex); false when malformed.
 bool parse_usb_id(const char* text, UsbId* id);
 

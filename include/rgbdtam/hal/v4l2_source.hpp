@@ -76,9 +76,8 @@ enum class V4l2Colour { kYuyv, kMjpeg };
 
 class V4l2Source : public LiveSensor {
  public:
-  // depth_path: the Z16 node; colour_path: the colour node (YUYV or MJPEG); frames width x
-  // height on both.
-  // depth_path and colour_path are empty when locate_by_usb() was called first.
+  // depth_path: the Z16 node; colour_path: the colour node (YUYV or MJPEG), both empty when
+  // locate_by_usb() was called first; frames width x height on both.
   Status open(V4l2Io* io, const char* depth_path, const char* colour_path, int width, int height,
               int64_t max_pair_dt_ns, int timeout_ms, V4l2Colour colour = V4l2Colour::kYuyv);
   // Init time, before open(): the nodes are found by the camera's USB id and what they offer
