@@ -20,7 +20,9 @@ int usage() {
                "  rgbdtam-stress noise <in> <out> --config <file> --kind depth|colour|both\n"
                "                [--seed <n>]\n"
                "  rgbdtam-stress there-and-back <in> <out> --config <file>\n"
-               "  rgbdtam-stress unregister <in> <out> --config <file>\n"
+               "  rgbdtam-stress unregister <in> <out> --config <file> [--focal-scale <f>]\n"
+               "                [--baseline-m <m>]\n"
+               "  rgbdtam-stress dither <in> <out> --config <file> [--seed <n>]\n"
                "  rgbdtam-stress pan <out> --peak-deg-s <deg/s> [--frames <n>] [--fps <hz>]\n"
                "  rgbdtam-stress degenerate <out> --scene corridor|room [--frames <n>]\n"
                "  rgbdtam-stress wall <out> --distance-m <m> --yaw-deg <deg> [--frames <n>]\n"
@@ -44,6 +46,7 @@ int main(int argc, char** argv) {
   std::string kind, scene;
   unsigned seed = 1;
   double exposure_ms = 0, peak = 0, fps = 30, gap_s = 1.0, distance_m = 0, yaw_deg = 0;
+  double focal_scale = 1.08, baseline_m = 0.025;
   int every = 0, burst = 0, period = 0, frames = 150;
   std::vector<std::string> positional;
   for (int i = 2; i < argc; ++i) {
@@ -69,6 +72,10 @@ int main(int argc, char** argv) {
       peak = std::atof(argv[++i]);
     } else if (a == "--distance-m" && has) {
       distance_m = std::atof(argv[++i]);
+    } else if (a == "--focal-scale" && has) {
+      focal_scale = std::atof(argv[++i]);
+    } else if (a == "--baseline-m" && has) {
+      baseline_m = std::atof(argv[++i]);
     } else if (a == "--yaw-deg" && has) {
       yaw_deg = std::atof(argv[++i]);
     } else if (a == "--frames" && has) {
@@ -99,7 +106,9 @@ int main(int argc, char** argv) {
   } else if (verb == "there-and-back" && positional.size() == 2 && config != nullptr) {
     ok = there_and_back(positional[0], positional[1], config);
   } else if (verb == "unregister" && positional.size() == 2 && config != nullptr) {
-    ok = unregister_depth(positional[0], positional[1], config);
+    ok = unregister_depth(positional[0], positional[1], config, focal_scale, baseline_m);
+  } else if (verb == "dither" && positional.size() == 2 && config != nullptr) {
+    ok = dither_depth(positional[0], positional[1], config, seed);
   } else if (verb == "concat" && positional.size() == 3) {
     ok = concatenate(positional[0], positional[1], positional[2], gap_s);
   } else if (verb == "wander" && positional.size() == 2 && config != nullptr) {

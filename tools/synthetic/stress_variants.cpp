@@ -345,21 +345,13 @@ bool blur_sequence(const std::string& in, const std::string& out, const std::str
   return true;
 }
 
-bool unregister_depth(const std::string& in, const std::string& out, const std::string& config) {
-  Params p;
-  if (!load_params(config, &p)) return false;
-  DepthCameraParams depth_camera;
-  depth_camera.register_to_colour = true;
+namespace {
+// Every depth frame of in written anew into out as move(depth, out_pixels) makes it; colour,
+// stamps and ground truth as recorded.
+template <typename Move>
+bool rewrite_depth(const std::string& in, const std::string& out, const Params& p,
+                   const std::string& header, Move move) {
   const PinholeIntrinsics& c = p.camera;
-  depth_camera.intrinsics = {c.fx_px * 1.08, c.fy_px * 1.08, c.cx_px + 4.0,
-                             c.cy_px - 3.0,  c.width_px,     c.height_px};
-  depth_camera.distortion.k1 = -0.04;
-  depth_camera.distortion.k2 = 0.01;
-  depth_camera.T_c_d = SE3(so3_exp(Vector3d(0.004, -0.008, 0.005)), Vector3d(0.025, 0.001, -0.002));
-  DepthRegistration to_depth_camera;
-  to_depth_camera.init(CameraModel{p.camera, p.distortion},
-                       CameraModel{depth_camera.intrinsics, depth_camera.distortion},
-                       depth_camera.T_c_d.inverse(), p.sensor.depth_factor);
   TumReplaySource source;
   Status s = source.open(in.c_str(), c.width_px, c.height_px, p.sensor.max_rgb_depth_dt_ns,
                          p.sensor.depth_time_offset_ns);
@@ -369,7 +361,7 @@ bool unregister_depth(const std::string& in, const std::string& out, const std::
       !copy_file(in, out, "calib.txt", false) || !link_into(in, out, "rgb")) {
     return false;
   }
-  std::vector<std::string> depth_lines = {"# depth of " + in + " in a depth camera of its own"};
+  std::vector<std::string> depth_lines = {"# " + header};
   ImageU8 gray;
   ImageU16 depth;
   gray.allocate(c.width_px, c.height_px);
@@ -384,7 +376,7 @@ bool unregister_depth(const std::string& in, const std::string& out, const std::
     // Unreadable, without depth or paired again with the last depth: nothing new to move.
     if (!s.is_ok() || frame.depth == nullptr || frame.depth_timestamp_ns == last_stamp_ns) continue;
     last_stamp_ns = frame.depth_timestamp_ns;
-    to_depth_camera.apply(frame.depth, moved.data());
+    move(frame.depth, moved.data());
     const std::string name = "depth/" + std::to_string(depth_lines.size() - 1) + ".png";
     if (!write_png_gray16(out + "/" + name, c.width_px, c.height_px, moved.data())) {
       return fail("cannot write " + out + "/" + name);
@@ -394,6 +386,40 @@ bool unregister_depth(const std::string& in, const std::string& out, const std::
     depth_lines.push_back(std::string(stamp) + " " + name);
   }
   if (!write_lines(out + "/depth.txt", depth_lines)) return false;
+  std::printf("%s: %zu depth frames, %s\n", out.c_str(), depth_lines.size() - 1, header.c_str());
+  return true;
+}
+}  // namespace
+
+bool unregister_depth(const std::string& in, const std::string& out, const std::string& config,
+                      double focal_scale, double baseline_m) {
+  Params p;
+  if (!load_params(config, &p)) return false;
+  if (!(focal_scale > 0.5 && focal_scale < 2.0) || !(std::fabs(baseline_m) < 0.2)) {
+    return fail("unregister: the focal scale must be within 0.5-2 and the baseline within 0.2 m");
+  }
+  DepthCameraParams depth_camera;
+  depth_camera.register_to_colour = true;
+  const PinholeIntrinsics& c = p.camera;
+  depth_camera.intrinsics = {c.fx_px * focal_scale,
+                             c.fy_px * focal_scale,
+                             c.cx_px + 4.0,
+                             c.cy_px - 3.0,
+                             c.width_px,
+                             c.height_px};
+  depth_camera.distortion.k1 = -0.04;
+  depth_camera.distortion.k2 = 0.01;
+  depth_camera.T_c_d =
+      SE3(so3_exp(Vector3d(0.004, -0.008, 0.005)), Vector3d(baseline_m, 0.001, -0.002));
+  DepthRegistration to_depth_camera;
+  to_depth_camera.init(CameraModel{p.camera, p.distortion},
+                       CameraModel{depth_camera.intrinsics, depth_camera.distortion},
+                       depth_camera.T_c_d.inverse(), p.sensor.depth_factor);
+  if (!rewrite_depth(
+          in, out, p, "depth of " + in + " in a depth camera of its own",
+          [&](const uint16_t* depth, uint16_t* moved) { to_depth_camera.apply(depth, moved); })) {
+    return false;
+  }
   Params keys = p;
   keys.depth_camera = depth_camera;
   std::vector<char> listing(1 << 17);
@@ -406,9 +432,26 @@ bool unregister_depth(const std::string& in, const std::string& out, const std::
     line = end != nullptr ? end + 1 : line + l.size();
   }
   if (!write_lines(out + "/depth_camera.conf", conf)) return false;
-  std::printf("%s: %zu depth frames moved into a depth camera of their own (%s)\n", out.c_str(),
-              depth_lines.size() - 1, (out + "/depth_camera.conf").c_str());
+  std::printf("register it back with %s\n", (out + "/depth_camera.conf").c_str());
   return true;
+}
+
+bool dither_depth(const std::string& in, const std::string& out, const std::string& config,
+                  unsigned seed) {
+  Params p;
+  if (!load_params(config, &p)) return false;
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> step(-1, 1);
+  const size_t n = static_cast<size_t>(p.camera.width_px) * p.camera.height_px;
+  return rewrite_depth(
+      in, out, p, "depth of " + in + " dithered by one raw unit, seed " + std::to_string(seed),
+      [&](const uint16_t* depth, uint16_t* dithered) {
+        for (size_t i = 0; i < n; ++i) {
+          const int v = depth[i];  // holes and the top value stay as they are
+          dithered[i] =
+              static_cast<uint16_t>(v == 0 || v == 65535 ? v : std::max(1, v + step(rng)));
+        }
+      });
 }
 
 namespace {
