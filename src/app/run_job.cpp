@@ -98,6 +98,7 @@ Status open_v4l2(const Board& board, const Params& params, BoardSensor* sensor, 
                   board.sensor_device);
     colour = comma + 1;
   }
+  sensor->v4l2.use_camera_clock(board.sensor_clock_hz);
   RGBDTAM_RETURN_IF_ERROR(sensor->v4l2.open(
       v4l2_io != nullptr ? v4l2_io : &sensor->v4l2_io, depth, colour, params.camera.width_px,
       params.camera.height_px, params.sensor.max_rgb_depth_dt_ns, kFrameTimeoutMs,
@@ -393,8 +394,15 @@ void print_v4l2_summary(const V4l2Source& v4l2) {
   const V4l2Nodes& n = v4l2.nodes();
   const V4l2Counters& c = v4l2.counters();
   std::printf("v4l2: depth %s, colour %s", n.depth, n.colour);
-  if (n.depth_metadata[0] != '\0' || n.colour_metadata[0] != '\0') {
-    std::printf(" (their metadata nodes, not read: %s %s)", n.depth_metadata, n.colour_metadata);
+  if (v4l2.reads_metadata()) {
+    std::printf(
+        " (metadata %s %s: %u pairs on the camera's clock, %u frames without metadata, "
+        "%u frames lost before the driver)",
+        n.depth_metadata, n.colour_metadata, c.camera_stamped, c.metadata_missing,
+        c.lost_before_driver);
+  } else if (n.depth_metadata[0] != '\0' || n.colour_metadata[0] != '\0') {
+    std::printf(" (their metadata nodes, not read without sensor.clock_hz: %s %s)",
+                n.depth_metadata, n.colour_metadata);
   }
   std::printf(
       "; depth minus colour stamp %+.1f ms mean (%+.1f to %+.1f) over %u pairs, %u unpaired, %u "

@@ -46,7 +46,18 @@ int SystemV4l2Io::poll(int fd, int timeout_ms) {
 V4l2Stream::~V4l2Stream() { close(); }
 
 Status V4l2Stream::open(V4l2Io* io, const char* path, uint32_t fourcc, int width, int height) {
+  return open_as(V4L2_BUF_TYPE_VIDEO_CAPTURE, io, path, fourcc, width, height);
+}
+
+Status V4l2Stream::open_metadata(V4l2Io* io, const char* path) {
+  return open_as(V4L2_BUF_TYPE_META_CAPTURE, io, path, V4L2_META_FMT_D4XX, 0, 0);
+}
+
+Status V4l2Stream::open_as(uint32_t type, V4l2Io* io, const char* path, uint32_t fourcc, int width,
+                           int height) {
   io_ = io;
+  type_ = type;
+  const bool metadata = type == V4L2_BUF_TYPE_META_CAPTURE;
   std::snprintf(path_, sizeof(path_), "%s", path);
   fd_ = io->open(path, O_RDWR | O_NONBLOCK | O_CLOEXEC);
   if (fd_ < 0) {
@@ -59,26 +70,39 @@ Status V4l2Stream::open(V4l2Io* io, const char* path, uint32_t fourcc, int width
   }
   const uint32_t caps =
       (cap.capabilities & V4L2_CAP_DEVICE_CAPS) != 0 ? cap.device_caps : cap.capabilities;
-  if ((caps & V4L2_CAP_VIDEO_CAPTURE) == 0 || (caps & V4L2_CAP_STREAMING) == 0) {
+  const uint32_t capture = metadata ? V4L2_CAP_META_CAPTURE : V4L2_CAP_VIDEO_CAPTURE;
+  if ((caps & capture) == 0 || (caps & V4L2_CAP_STREAMING) == 0) {
     return Status::error(StatusCode::kInvalidArgument,
-                         "%s: not a streaming video capture node (capabilities 0x%08x)", path,
-                         caps);
+                         "%s: not a streaming %s capture node (capabilities 0x%08x)", path,
+                         metadata ? "metadata" : "video", caps);
   }
   v4l2_format fmt{};
-  fmt.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-  fmt.fmt.pix.width = static_cast<uint32_t>(width);
-  fmt.fmt.pix.height = static_cast<uint32_t>(height);
-  fmt.fmt.pix.pixelformat = fourcc;
-  fmt.fmt.pix.field = V4L2_FIELD_NONE;
+  fmt.type = type;
   char want[5], got[5];
   v4l2_fourcc_text(fourcc, want);
+  if (metadata) {
+    fmt.fmt.meta.dataformat = fourcc;
+  } else {
+    fmt.fmt.pix.width = static_cast<uint32_t>(width);
+    fmt.fmt.pix.height = static_cast<uint32_t>(height);
+    fmt.fmt.pix.pixelformat = fourcc;
+    fmt.fmt.pix.field = V4L2_FIELD_NONE;
+  }
   if (io->ioctl(fd_, VIDIOC_S_FMT, &fmt) < 0) {
     return Status::error(StatusCode::kInvalidArgument, "%s: format %s %dx%d refused: %s", path,
                          want, width, height, std::strerror(errno));
   }
-  // The driver answers with the nearest format it has: anything else is a refusal.
-  if (fmt.fmt.pix.pixelformat != fourcc || fmt.fmt.pix.width != static_cast<uint32_t>(width) ||
-      fmt.fmt.pix.height != static_cast<uint32_t>(height)) {
+  // The driver answers with the nearest format it has: anything else is a refusal (a metadata
+  // node without the camera's own format gives the standard header, which is read as well).
+  if (metadata) {
+    if (fmt.fmt.meta.dataformat != fourcc && fmt.fmt.meta.dataformat != V4L2_META_FMT_UVC) {
+      v4l2_fourcc_text(fmt.fmt.meta.dataformat, got);
+      return Status::error(StatusCode::kInvalidArgument,
+                           "%s: metadata format %s refused; the node offers %s", path, want, got);
+    }
+  } else if (fmt.fmt.pix.pixelformat != fourcc ||
+             fmt.fmt.pix.width != static_cast<uint32_t>(width) ||
+             fmt.fmt.pix.height != static_cast<uint32_t>(height)) {
     v4l2_fourcc_text(fmt.fmt.pix.pixelformat, got);
     return Status::error(StatusCode::kInvalidArgument,
                          "%s: format %s %dx%d refused; the device offers %s %ux%u", path, want,
@@ -86,7 +110,7 @@ Status V4l2Stream::open(V4l2Io* io, const char* path, uint32_t fourcc, int width
   }
   v4l2_requestbuffers req{};
   req.count = kBuffers;
-  req.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  req.type = type;
   req.memory = V4L2_MEMORY_MMAP;
   if (io->ioctl(fd_, VIDIOC_REQBUFS, &req) < 0 || req.count < 2) {
     return Status::error(StatusCode::kIoError, "%s: no mmap buffers (%s)", path,
@@ -95,7 +119,7 @@ Status V4l2Stream::open(V4l2Io* io, const char* path, uint32_t fourcc, int width
   count_ = static_cast<int>(req.count < kBuffers ? req.count : kBuffers);
   for (int i = 0; i < count_; ++i) {
     v4l2_buffer b{};
-    b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    b.type = type;
     b.memory = V4L2_MEMORY_MMAP;
     b.index = static_cast<uint32_t>(i);
     if (io->ioctl(fd_, VIDIOC_QUERYBUF, &b) < 0) {
@@ -112,8 +136,8 @@ Status V4l2Stream::open(V4l2Io* io, const char* path, uint32_t fourcc, int width
     owed_[i] = false;
     RGBDTAM_RETURN_IF_ERROR(queue(i));
   }
-  v4l2_buf_type type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-  if (io->ioctl(fd_, VIDIOC_STREAMON, &type) < 0) {
+  v4l2_buf_type stream_type = static_cast<v4l2_buf_type>(type);
+  if (io->ioctl(fd_, VIDIOC_STREAMON, &stream_type) < 0) {
     return Status::error(StatusCode::kIoError, "%s: stream on: %s", path, std::strerror(errno));
   }
   streaming_ = true;
@@ -122,7 +146,7 @@ Status V4l2Stream::open(V4l2Io* io, const char* path, uint32_t fourcc, int width
 
 Status V4l2Stream::queue(int index) {
   v4l2_buffer b{};
-  b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+  b.type = type_;
   b.memory = V4L2_MEMORY_MMAP;
   b.index = static_cast<uint32_t>(index);
   if (io_->ioctl(fd_, VIDIOC_QBUF, &b) < 0) {
@@ -151,6 +175,36 @@ Status V4l2Stream::requeue_owed(V4l2Counters* counters) {
   return Status::ok();
 }
 
+Status V4l2Stream::dequeue(int* index, int64_t* timestamp_ns, bool* retry, V4l2Counters* counters) {
+  *index = -1;
+  *retry = false;
+  v4l2_buffer b{};
+  b.type = type_;
+  b.memory = V4L2_MEMORY_MMAP;
+  if (io_->ioctl(fd_, VIDIOC_DQBUF, &b) < 0) {
+    if (errno == EINTR || errno == EAGAIN) {
+      *retry = true;
+      return Status::ok();
+    }
+    return Status::error(StatusCode::kIoError, "%s: %s", path_,
+                         errno == ENODEV ? "device unplugged" : std::strerror(errno));
+  }
+  if (b.index >= static_cast<uint32_t>(count_)) {
+    return Status::error(StatusCode::kIoError, "%s: driver returned buffer %u of %d", path_,
+                         b.index, count_);
+  }
+  if ((b.flags & V4L2_BUF_FLAG_ERROR) != 0) {
+    ++counters->error_buffers;
+    return release(static_cast<int>(b.index), counters);
+  }
+  buffers_[b.index].used = b.bytesused;
+  buffers_[b.index].sequence = b.sequence;
+  *index = static_cast<int>(b.index);
+  *timestamp_ns = static_cast<int64_t>(b.timestamp.tv_sec) * 1000000000 +
+                  static_cast<int64_t>(b.timestamp.tv_usec) * 1000;
+  return Status::ok();
+}
+
 Status V4l2Stream::take(int timeout_ms, int* index, int64_t* timestamp_ns, V4l2Counters* counters) {
   *index = -1;
   RGBDTAM_RETURN_IF_ERROR(requeue_owed(counters));
@@ -171,49 +225,50 @@ Status V4l2Stream::take(int timeout_ms, int* index, int64_t* timestamp_ns, V4l2C
       return fail(Status::error(StatusCode::kIoError, "%s: %s", path_,
                                 errno == ENODEV ? "device unplugged" : std::strerror(errno)));
     }
-    v4l2_buffer b{};
-    b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-    b.memory = V4L2_MEMORY_MMAP;
-    if (ready < 0 || io_->ioctl(fd_, VIDIOC_DQBUF, &b) < 0) {
+    int got = -1;
+    int64_t stamp_ns = 0;
+    bool retry = ready < 0;
+    if (!retry) {
+      const Status s = dequeue(&got, &stamp_ns, &retry, counters);
+      if (!s.is_ok()) return fail(s);
+    }
+    if (retry) {
       if (errno == EAGAIN && *index >= 0) return Status::ok();
-      if (errno == EINTR || errno == EAGAIN) {
-        ++retries;
-        ++counters->retries;
-        continue;
-      }
-      return fail(Status::error(StatusCode::kIoError, "%s: %s", path_,
-                                errno == ENODEV ? "device unplugged" : std::strerror(errno)));
-    }
-    if (b.index >= static_cast<uint32_t>(count_)) {
-      return fail(Status::error(StatusCode::kIoError, "%s: driver returned buffer %u of %d", path_,
-                                b.index, count_));
-    }
-    if ((b.flags & V4L2_BUF_FLAG_ERROR) != 0) {
-      ++counters->error_buffers;
-      const Status r = release(static_cast<int>(b.index), counters);
-      if (!r.is_ok()) return fail(r);
+      ++retries;
+      ++counters->retries;
       continue;
     }
-    if (*index >= 0) {  // a newer frame overtook the one held so far
+    if (got < 0) continue;  // an error buffer, given back
+    if (*index >= 0) {      // a newer frame overtook the one held so far
       ++counters->overtaken;
       const Status r = release(*index, counters);
       *index = -1;
       if (!r.is_ok()) return fail(r);
     }
-    buffers_[b.index].used = b.bytesused;
-    *index = static_cast<int>(b.index);
-    *timestamp_ns = static_cast<int64_t>(b.timestamp.tv_sec) * 1000000000 +
-                    static_cast<int64_t>(b.timestamp.tv_usec) * 1000;
+    *index = got;
+    *timestamp_ns = stamp_ns;
     wait_ms = 0;  // anything already waiting is newer still
   }
   return fail(
       Status::error(StatusCode::kIoError, "%s: device keeps answering EINTR/EAGAIN", path_));
 }
 
+Status V4l2Stream::take_oldest(int* index, V4l2Counters* counters) {
+  *index = -1;
+  RGBDTAM_RETURN_IF_ERROR(requeue_owed(counters));
+  for (int tries = 0; tries < count_ + 1; ++tries) {  // error buffers are skipped
+    int64_t stamp_ns = 0;
+    bool retry = false;
+    RGBDTAM_RETURN_IF_ERROR(dequeue(index, &stamp_ns, &retry, counters));
+    if (retry || *index >= 0) return Status::ok();
+  }
+  return Status::ok();
+}
+
 void V4l2Stream::close() {
   if (fd_ < 0) return;
   if (streaming_) {
-    v4l2_buf_type type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    v4l2_buf_type type = static_cast<v4l2_buf_type>(type_);
     (void)io_->ioctl(fd_, VIDIOC_STREAMOFF, &type);
     streaming_ = false;
   }
@@ -224,6 +279,30 @@ void V4l2Stream::close() {
   count_ = 0;
   (void)io_->close(fd_);
   fd_ = -1;
+}
+
+bool V4l2MetadataReader::find(uint32_t sequence, V4l2Counters* counters, UvcFrameMetadata* out) {
+  for (int index = -1;;) {
+    if (!stream_.take_oldest(&index, counters).is_ok() || index < 0) break;
+    Kept& k = kept_[next_];
+    next_ = (next_ + 1) % kKept;
+    k.sequence = stream_.sequence(index);
+    k.valid = parse_uvc_metadata(stream_.data(index), stream_.bytes_used(index), &k.metadata);
+    if (!stream_.release(index, counters).is_ok()) break;
+  }
+  for (const Kept& k : kept_) {
+    if (k.valid && k.sequence == sequence) {
+      *out = k.metadata;
+      return true;
+    }
+  }
+  return false;
+}
+
+void V4l2MetadataReader::close() {
+  stream_.close();
+  for (Kept& k : kept_) k = Kept();
+  next_ = 0;
 }
 
 Status V4l2Source::open(V4l2Io* io, const char* depth_path, const char* colour_path, int width,
@@ -256,27 +335,86 @@ Status V4l2Source::open_stream() {
     RGBDTAM_RETURN_IF_ERROR(finder_.find(io_, sysfs_root_, devfs_root_, usb_, colour, &nodes_));
   }
   RGBDTAM_RETURN_IF_ERROR(depth_.open(io_, nodes_.depth, V4L2_PIX_FMT_Z16, width_, height_));
-  return colour_.open(io_, nodes_.colour, colour, width_, height_);
+  RGBDTAM_RETURN_IF_ERROR(colour_.open(io_, nodes_.colour, colour, width_, height_));
+  // Without both metadata nodes, frames are stamped on arrival as before.
+  if (camera_clock_hz_ > 0.0 && nodes_.depth_metadata[0] != '\0' &&
+      nodes_.colour_metadata[0] != '\0' &&
+      (!depth_meta_.open(io_, nodes_.depth_metadata).is_ok() ||
+       !colour_meta_.open(io_, nodes_.colour_metadata).is_ok())) {
+    depth_meta_.close();
+    colour_meta_.close();
+  }
+  camera_clock_.reset(camera_clock_hz_ > 0.0 ? camera_clock_hz_ : 1e6);
+  depth_counted_ = colour_counted_ = false;
+  return Status::ok();
+}
+
+V4l2Source::Stamped V4l2Source::stamp(V4l2Stream* stream, V4l2MetadataReader* reader, int index,
+                                      int64_t arrival_ns, uint32_t* last_counter,
+                                      uint32_t* last_sequence, bool* counted) {
+  Stamped out{false, arrival_ns};
+  UvcFrameMetadata m;
+  if (!reader->is_open()) return out;
+  const uint32_t sequence = stream->sequence(index);
+  if (!reader->find(sequence, &counters_, &m)) {
+    ++counters_.metadata_missing;
+    return out;
+  }
+  if (m.has_frame_counter) {
+    // Frames the camera counted beyond those the driver numbered never reached the driver.
+    const uint32_t camera_step = m.frame_counter - *last_counter;
+    const uint32_t driver_step = sequence - *last_sequence;
+    if (*counted && camera_step > driver_step && camera_step < 0x80000000u) {
+      counters_.lost_before_driver += camera_step - driver_step;
+    }
+    *last_counter = m.frame_counter;
+    *last_sequence = sequence;
+    *counted = true;
+  }
+  if (m.has_pts) out = {true, camera_clock_.to_host_ns(m.pts, arrival_ns)};
+  return out;
 }
 
 Status V4l2Source::next(SensorFrame* frame, Status* warning) {
   *warning = Status::ok();
   const size_t pixels = static_cast<size_t>(width_) * static_cast<size_t>(height_);
   int d = -1, c = -1;
-  int64_t td = 0, tc = 0;
-  Status s = depth_.take(timeout_ms_, &d, &td, &counters_);
-  if (s.is_ok()) s = colour_.take(timeout_ms_, &c, &tc, &counters_);
+  int64_t arrival_d = 0, arrival_c = 0;
+  Stamped sd, sc;
+  auto take_depth = [&] {
+    const Status t = depth_.take(timeout_ms_, &d, &arrival_d, &counters_);
+    if (t.is_ok()) {
+      sd = stamp(&depth_, &depth_meta_, d, arrival_d, &depth_counter_, &depth_sequence_,
+                 &depth_counted_);
+    }
+    return t;
+  };
+  auto take_colour = [&] {
+    const Status t = colour_.take(timeout_ms_, &c, &arrival_c, &counters_);
+    if (t.is_ok()) {
+      sc = stamp(&colour_, &colour_meta_, c, arrival_c, &colour_counter_, &colour_sequence_,
+                 &colour_counted_);
+    }
+    return t;
+  };
+  // Depth minus colour: on the camera's clock when both frames have its stamps.
+  const auto apart_ns = [&] {
+    return sd.on_camera_clock && sc.on_camera_clock ? sd.stamp_ns - sc.stamp_ns
+                                                    : arrival_d - arrival_c;
+  };
+  Status s = take_depth();
+  if (s.is_ok()) s = take_colour();
   // Pair by timestamp: the older of a too-distant pair is let go.
-  while (s.is_ok() && (td - tc > max_pair_dt_ns_ || tc - td > max_pair_dt_ns_)) {
+  while (s.is_ok() && (apart_ns() > max_pair_dt_ns_ || -apart_ns() > max_pair_dt_ns_)) {
     ++counters_.unpaired;
-    if (td < tc) {
+    if (apart_ns() < 0) {
       s = depth_.release(d, &counters_);
       d = -1;
-      if (s.is_ok()) s = depth_.take(timeout_ms_, &d, &td, &counters_);
+      if (s.is_ok()) s = take_depth();
     } else {
       s = colour_.release(c, &counters_);
       c = -1;
-      if (s.is_ok()) s = colour_.take(timeout_ms_, &c, &tc, &counters_);
+      if (s.is_ok()) s = take_colour();
     }
   }
   const bool mjpeg = colour_format_ == V4l2Colour::kMjpeg;
@@ -306,9 +444,11 @@ Status V4l2Source::next(SensorFrame* frame, Status* warning) {
   RGBDTAM_RETURN_IF_ERROR(s);
   arrival_ns_ = monotonic_ns();
   frame->sequence = sequence_++;
-  frame->timestamp_ns = tc;
-  frame->depth_timestamp_ns = td;
-  const int64_t offset = td - tc;
+  const bool camera_clock = sd.on_camera_clock && sc.on_camera_clock;
+  if (camera_clock) ++counters_.camera_stamped;
+  frame->timestamp_ns = camera_clock ? sc.stamp_ns : arrival_c;
+  frame->depth_timestamp_ns = camera_clock ? sd.stamp_ns : arrival_d;
+  const int64_t offset = frame->depth_timestamp_ns - frame->timestamp_ns;
   if (counters_.delivered == 0 || offset < counters_.pair_offset_min_ns) {
     counters_.pair_offset_min_ns = offset;
   }
@@ -327,6 +467,8 @@ Status V4l2Source::next(SensorFrame* frame, Status* warning) {
 void V4l2Source::close() {
   depth_.close();
   colour_.close();
+  depth_meta_.close();
+  colour_meta_.close();
 }
 
 }  // namespace rgbdtam

@@ -43,6 +43,10 @@ const KeySpec kSpecs[] = {
                  false),
     {"sensor.fps", ValueType::kReal, 1, 120, "Hz", "frame rate: the tracking cadence",
      RGBDTAM_FIELD(sensor_fps), false},
+    {"sensor.clock_hz", ValueType::kReal, 0, 1e9, "Hz",
+     "v4l2: the camera clock's rate in its UVC metadata (D4xx: 1000000); frames are stamped and "
+     "paired on it (0: by arrival)",
+     RGBDTAM_FIELD(sensor_clock_hz), false},
     {"sensor.stall_ms", ValueType::kInt, 100, 60000, "ms",
      "no frame for this long: USB reset (with sensor.usb_id) and reopen",
      RGBDTAM_FIELD(sensor_stall_ms), false},

@@ -12,6 +12,7 @@
 
 #include "clip_camera.hpp"
 #include "config_files.hpp"
+#include "fake_usb.hpp"
 #include "fake_v4l2.hpp"
 #include "record_job.hpp"
 #include "replay_job.hpp"
@@ -291,6 +292,54 @@ TEST(Allocations, NoneWhileAV4l2SensorDeliversSkipsAndTimesOut) {
   EXPECT_EQ(g_calls.load(), 0) << g_bytes.load() << " bytes allocated while streaming";
   std::printf("v4l2 + recovery: %d frames, %d errors, %u dropped, %ld allocations\n", frames,
               errors, source.dropped(), g_calls.load());
+}
+
+// A D435 found by its USB id, its metadata nodes read beside its video nodes: every frame's
+// metadata is found, parsed and put on the camera's clock without the heap.
+TEST(Allocations, NoneWhileReadingTheCamerasClockFromItsMetadataNodes) {
+  const std::string sysfs = testing::make_temp_dir("alloc_sysfs");
+  const std::string devfs = testing::make_temp_dir("alloc_devfs");
+  ASSERT_TRUE(testing::add_usb_device(sysfs, "2-1", "8086", "0b07", 2, 3));
+  testing::FakeV4l2 io;
+  io.nodes.reserve(4);
+  const char* interface_of[] = {"2-1:1.0", "2-1:1.0", "2-1:1.3", "2-1:1.3"};
+  const uint32_t fourcc_of[] = {V4L2_PIX_FMT_Z16, 0, V4L2_PIX_FMT_YUYV, 0};
+  for (int i = 0; i < 4; ++i) {
+    ASSERT_TRUE(testing::add_video_node(sysfs, "2-1", interface_of[i], 2 + i));
+    testing::FakeV4l2::Node& n = io.add(devfs + "/video" + std::to_string(2 + i), fourcc_of[i]);
+    n.metadata = fourcc_of[i] == 0;
+    n.meta_format = V4L2_META_FMT_D4XX;
+  }
+  for (int i = 0; i < 40; ++i) {
+    const int64_t t_ms = 1000 + 33 * i;
+    for (int n = 0; n < 4; ++n) {
+      testing::Event e = testing::frame(t_ms + n / 2 + i % 3, static_cast<uint8_t>(i));
+      e.sequence = i;
+      e.pts = static_cast<uint32_t>((t_ms - 5) * 1000);
+      e.frame_counter = static_cast<uint32_t>(i + (i > 20 ? 1 : 0));
+      io.nodes[n].script.push_back(e);
+    }
+  }
+  io.now_ns = 900 * testing::kMs;
+  V4l2Source source;
+  source.locate_by_usb({0x8086, 0x0b07}, sysfs.c_str(), devfs.c_str());
+  source.use_camera_clock(1e6);
+  ASSERT_TRUE(source.open(&io, "", "", testing::kW, testing::kH, 10 * testing::kMs, 500).is_ok());
+  ASSERT_TRUE(source.reads_metadata());
+  g_calls = 0;
+  g_bytes = 0;
+  g_armed = true;
+  int frames = 0;
+  for (int i = 0; i < 40; ++i) {
+    SensorFrame f;
+    Status warning;
+    frames += source.next(&f, &warning).is_ok();
+  }
+  g_armed = false;
+  EXPECT_EQ(frames, 40);
+  EXPECT_EQ(source.counters().camera_stamped, 40u);
+  EXPECT_EQ(source.counters().lost_before_driver, 2u) << "depth's and colour's counters skip one";
+  EXPECT_EQ(g_calls.load(), 0) << g_bytes.load() << " bytes allocated while streaming";
 }
 
 // A UVC camera sending MJPEG at full resolution: libjpeg decodes every frame from the arena

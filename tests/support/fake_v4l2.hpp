@@ -38,6 +38,10 @@ struct Event {
   enum Kind { kFrame, kEintr, kEagain, kErrorFlag, kUnplug } kind = kFrame;
   int64_t t_ns = 0;
   uint8_t fill = 0;
+  int32_t sequence = -1;  // the buffer's frame number (-1: the node's count of frames so far)
+  // Metadata nodes: the camera's clock at capture and its frame counter (D4XX format only).
+  uint32_t pts = 0;
+  uint32_t frame_counter = 0;
 };
 
 class FakeV4l2 : public V4l2Io {
@@ -51,11 +55,13 @@ class FakeV4l2 : public V4l2Io {
     bool open = false;
     bool wedged = false;  // delivers nothing until opened again
     int opens = 0;
-    std::vector<std::vector<uint8_t>> jpeg;  // MJPEG: a frame's fill picks one of these
-    std::vector<uint32_t> also_offers;       // VIDIOC_ENUM_FMT: fourcc first, then these
-    bool metadata = false;                   // a UVC metadata node (no video capture)
-    int qbuf_failures = 0;                   // the next VIDIOC_QBUFs fail with EIO
-    bool qbuf_broken = false;                // every VIDIOC_QBUF fails until opened again
+    std::vector<std::vector<uint8_t>> jpeg;    // MJPEG: a frame's fill picks one of these
+    std::vector<uint32_t> also_offers;         // VIDIOC_ENUM_FMT: fourcc first, then these
+    bool metadata = false;                     // a UVC metadata node (no video capture)
+    int qbuf_failures = 0;                     // the next VIDIOC_QBUFs fail with EIO
+    bool qbuf_broken = false;                  // every VIDIOC_QBUF fails until opened again
+    uint32_t meta_format = V4L2_META_FMT_UVC;  // a metadata node's format (UVCH or D4XX)
+    uint32_t frames = 0;                       // frames delivered (their sequence numbers)
   };
   static constexpr size_t kMjpegBufferBytes = 1 << 16;
   std::vector<Node> nodes;
@@ -65,12 +71,15 @@ class FakeV4l2 : public V4l2Io {
   int64_t now_ns = 0;
 
   Node& add(const std::string& path, uint32_t fourcc) {
-    nodes.push_back({path, fourcc, {}, {}, {}, false, false, 0, {}, {}, false, 0, false});
+    nodes.push_back(
+        {path, fourcc, {}, {}, {}, false, false, 0, {}, {}, false, 0, false, V4L2_META_FMT_UVC, 0});
     return nodes.back();
   }
   static size_t buffer_bytes(const Node& n) {
+    if (n.metadata) return kMetadataBufferBytes;
     return n.fourcc == V4L2_PIX_FMT_MJPEG ? kMjpegBufferBytes : kW * kH * 2;
   }
+  static constexpr size_t kMetadataBufferBytes = 1024;
   Node* node(int fd) {
     return fd >= 3 && fd - 3 < static_cast<int>(nodes.size()) ? &nodes[fd - 3] : nullptr;
   }
@@ -116,6 +125,11 @@ class FakeV4l2 : public V4l2Io {
       }
       case VIDIOC_S_FMT: {
         auto* f = static_cast<v4l2_format*>(arg);
+        if (n->metadata) {  // uvcvideo: the camera's own format if asked for, else UVCH
+          if (f->fmt.meta.dataformat != n->meta_format) f->fmt.meta.dataformat = V4L2_META_FMT_UVC;
+          f->fmt.meta.buffersize = kMetadataBufferBytes;
+          return 0;
+        }
         f->fmt.pix.pixelformat = n->fourcc;  // the nearest it has
         f->fmt.pix.width = kW;
         f->fmt.pix.height = kH;
@@ -162,7 +176,11 @@ class FakeV4l2 : public V4l2Io {
         n->queued.pop_front();
         std::vector<uint8_t>& mem = n->buffers[b->index];
         b->bytesused = kW * kH * 2;
-        if (n->fourcc == V4L2_PIX_FMT_MJPEG) {
+        b->sequence = e.sequence >= 0 ? static_cast<uint32_t>(e.sequence) : n->frames;
+        ++n->frames;
+        if (n->metadata) {
+          b->bytesused = static_cast<uint32_t>(write_metadata(*n, e, mem.data()));
+        } else if (n->fourcc == V4L2_PIX_FMT_MJPEG) {
           const std::vector<uint8_t>& jpeg = n->jpeg[e.fill % n->jpeg.size()];
           std::memcpy(mem.data(), jpeg.data(), jpeg.size());
           b->bytesused = static_cast<uint32_t>(jpeg.size());
@@ -185,6 +203,30 @@ class FakeV4l2 : public V4l2Io {
       default:
         return fail(EINVAL);
     }
+  }
+  // One uvc_meta_buf block as uvcvideo writes it: arrival ns, USB frame number, then the payload
+  // header (length, flags PTS|SCR, PTS, SCR) and, in D4XX, Intel's capture timing block.
+  static size_t write_metadata(const Node& n, const Event& e, uint8_t* out) {
+    auto put32 = [](uint8_t* p, uint32_t v) {
+      for (int i = 0; i < 4; ++i) p[i] = static_cast<uint8_t>(v >> (8 * i));
+    };
+    const bool d4xx = n.meta_format == V4L2_META_FMT_D4XX;
+    const uint8_t length = d4xx ? 12 + 40 : 12;
+    std::memset(out, 0, 10 + length);
+    const uint64_t ns = static_cast<uint64_t>(e.t_ns);
+    std::memcpy(out, &ns, 8);
+    out[10] = length;
+    out[11] = 0x04 | 0x08;
+    put32(out + 12, e.pts);
+    if (d4xx) {
+      uint8_t* timing = out + 10 + 12;
+      put32(timing, 0x80000001u);  // capture timing
+      put32(timing + 4, 40);
+      put32(timing + 8, 1);     // version
+      put32(timing + 12, 0x1);  // the frame counter is valid
+      put32(timing + 16, e.frame_counter);
+    }
+    return 10 + length;
   }
   void* mmap(size_t, int fd, off_t offset) override {
     Node* n = node(fd);

@@ -350,6 +350,86 @@ TEST(V4l2Nodes, AResetThatRenumbersTheNodesIsFollowedAtTheReopen) {
   EXPECT_EQ(std::string(again.nodes().colour), rig.devfs + "/video12");
 }
 
+// A D435's depth and colour of one instant reach the host 3-20 ms after capture, unevenly: by
+// arrival, pairs drift apart by more than the pairing limit. Its metadata nodes give each frame's
+// capture on the camera's clock (microseconds) and the camera's frame counter.
+struct CameraClockScript {
+  static constexpr int kFrames = 12;
+  static constexpr int kMissingColourMetadata = 9;
+  const int64_t depth_late_ms[kFrames] = {0, 7, 2, 9, 4, 11, 6, 1, 8, 0, 10, 5};
+  const int64_t colour_late_ms[kFrames] = {0, 5, 1, 6, 2, 7, 3, 0, 4, 0, 5, 2};
+  // Colour is captured at 1000 + 33 k ms, depth 1 ms after it; depth's transfer takes 8 ms at
+  // best, colour's 3 ms.
+  static int64_t colour_capture_ms(int k) { return 1000 + 33 * k; }
+  void play(D435Rig* rig) const {
+    FakeV4l2::Node& depth_meta = rig->io.nodes[3];
+    FakeV4l2::Node& colour_meta = rig->io.nodes[7];
+    depth_meta.meta_format = colour_meta.meta_format = V4L2_META_FMT_D4XX;
+    for (int k = 0; k < kFrames; ++k) {
+      const int64_t depth_at_ms = colour_capture_ms(k) + 1 + 8 + depth_late_ms[k];
+      const int64_t colour_at_ms = colour_capture_ms(k) + 3 + colour_late_ms[k];
+      rig->depth->script.push_back(frame(depth_at_ms, static_cast<uint8_t>(k)));
+      rig->colour->script.push_back(frame(colour_at_ms, static_cast<uint8_t>(k)));
+      // The camera's counter skips two depth frames after the sixth (lost on the USB).
+      Event d = frame(depth_at_ms, 0), c = frame(colour_at_ms, 0);
+      d.sequence = c.sequence = k;
+      d.pts = static_cast<uint32_t>((colour_capture_ms(k) + 1) * 1000);
+      c.pts = static_cast<uint32_t>(colour_capture_ms(k) * 1000);
+      d.frame_counter = static_cast<uint32_t>(k + (k >= 6 ? 2 : 0));
+      c.frame_counter = static_cast<uint32_t>(k);
+      depth_meta.script.push_back(d);
+      if (k != kMissingColourMetadata) colour_meta.script.push_back(c);
+    }
+  }
+};
+
+TEST(V4l2Nodes, TheMetadataNodesStampAndPairFramesOnTheCamerasClock) {
+  const CameraClockScript script;
+  D435Rig rig;
+  V4l2Source source;
+  source.locate_by_usb({0x8086, 0x0b07}, rig.sysfs.c_str(), rig.devfs.c_str());
+  source.use_camera_clock(1e6);
+  ASSERT_TRUE(source.open(&rig.io, "", "", kW, kH, 6 * kMs, 500).is_ok());
+  ASSERT_TRUE(source.reads_metadata());
+  script.play(&rig);
+  for (int k = 0; k < CameraClockScript::kFrames; ++k) {
+    SensorFrame f;
+    Status warning;
+    const Status s = source.next(&f, &warning);
+    ASSERT_TRUE(s.is_ok()) << k << ": " << s.message();
+    EXPECT_EQ(f.depth[0], 100 * k) << "depth and colour of one instant";
+    EXPECT_EQ(f.gray[0], k);
+    if (k == 0) continue;  // the clock learns the transfer from the first pair
+    if (k == CameraClockScript::kMissingColourMetadata) {
+      // Stamped on arrival: 1 ms apart at capture, 6 ms apart on arrival.
+      EXPECT_EQ(f.depth_timestamp_ns - f.timestamp_ns, 6 * kMs);
+      continue;
+    }
+    // The colour transfer's best (3 ms) after capture, for both; 1 ms apart, as captured.
+    EXPECT_EQ(f.timestamp_ns, (CameraClockScript::colour_capture_ms(k) + 3) * kMs) << k;
+    EXPECT_EQ(f.depth_timestamp_ns - f.timestamp_ns, 1 * kMs) << k;
+  }
+  const V4l2Counters& c = source.counters();
+  EXPECT_EQ(c.unpaired, 0u);
+  EXPECT_EQ(c.camera_stamped, static_cast<uint32_t>(CameraClockScript::kFrames - 1));
+  EXPECT_EQ(c.metadata_missing, 1u);
+  EXPECT_EQ(c.lost_before_driver, 2u);
+
+  // By arrival alone the same frames drift apart: pairs are broken and frames let go.
+  D435Rig by_arrival;
+  V4l2Source plain;
+  plain.locate_by_usb({0x8086, 0x0b07}, by_arrival.sysfs.c_str(), by_arrival.devfs.c_str());
+  ASSERT_TRUE(plain.open(&by_arrival.io, "", "", kW, kH, 6 * kMs, 500).is_ok());
+  EXPECT_FALSE(plain.reads_metadata()) << "no camera clock rate configured";
+  script.play(&by_arrival);
+  for (;;) {
+    SensorFrame f;
+    Status warning;
+    if (!plain.next(&f, &warning).is_ok()) break;
+  }
+  EXPECT_GT(plain.counters().unpaired, 0u);
+}
+
 TEST(V4l2, ARefusedRequeueIsQueuedAgainAndNoBufferIsLost) {
   Rig rig;
   ASSERT_TRUE(rig.open().is_ok());
