@@ -345,13 +345,12 @@ Status V4l2Source::open_stream() {
     colour_meta_.close();
   }
   camera_clock_.reset(camera_clock_hz_ > 0.0 ? camera_clock_hz_ : 1e6);
-  depth_counted_ = colour_counted_ = false;
+  depth_count_ = colour_count_ = FrameCount();
   return Status::ok();
 }
 
 V4l2Source::Stamped V4l2Source::stamp(V4l2Stream* stream, V4l2MetadataReader* reader, int index,
-                                      int64_t arrival_ns, uint32_t* last_counter,
-                                      uint32_t* last_sequence, bool* counted) {
+                                      int64_t arrival_ns, FrameCount* count) {
   Stamped out{false, arrival_ns};
   UvcFrameMetadata m;
   if (!reader->is_open()) return out;
@@ -362,14 +361,12 @@ V4l2Source::Stamped V4l2Source::stamp(V4l2Stream* stream, V4l2MetadataReader* re
   }
   if (m.has_frame_counter) {
     // Frames the camera counted beyond those the driver numbered never reached the driver.
-    const uint32_t camera_step = m.frame_counter - *last_counter;
-    const uint32_t driver_step = sequence - *last_sequence;
-    if (*counted && camera_step > driver_step && camera_step < 0x80000000u) {
+    const uint32_t camera_step = m.frame_counter - count->camera;
+    const uint32_t driver_step = sequence - count->driver;
+    if (count->seen && camera_step > driver_step && camera_step < 0x80000000u) {
       counters_.lost_before_driver += camera_step - driver_step;
     }
-    *last_counter = m.frame_counter;
-    *last_sequence = sequence;
-    *counted = true;
+    *count = {true, m.frame_counter, sequence};
   }
   if (m.has_pts) out = {true, camera_clock_.to_host_ns(m.pts, arrival_ns)};
   return out;
@@ -381,21 +378,15 @@ Status V4l2Source::next(SensorFrame* frame, Status* warning) {
   int d = -1, c = -1;
   int64_t arrival_d = 0, arrival_c = 0;
   Stamped sd, sc;
-  auto take_depth = [&] {
-    const Status t = depth_.take(timeout_ms_, &d, &arrival_d, &counters_);
-    if (t.is_ok()) {
-      sd = stamp(&depth_, &depth_meta_, d, arrival_d, &depth_counter_, &depth_sequence_,
-                 &depth_counted_);
-    }
+  auto take = [&](V4l2Stream* stream, V4l2MetadataReader* reader, FrameCount* count, int* index,
+                  int64_t* arrival_ns, Stamped* stamped) {
+    const Status t = stream->take(timeout_ms_, index, arrival_ns, &counters_);
+    if (t.is_ok()) *stamped = stamp(stream, reader, *index, *arrival_ns, count);
     return t;
   };
+  auto take_depth = [&] { return take(&depth_, &depth_meta_, &depth_count_, &d, &arrival_d, &sd); };
   auto take_colour = [&] {
-    const Status t = colour_.take(timeout_ms_, &c, &arrival_c, &counters_);
-    if (t.is_ok()) {
-      sc = stamp(&colour_, &colour_meta_, c, arrival_c, &colour_counter_, &colour_sequence_,
-                 &colour_counted_);
-    }
-    return t;
+    return take(&colour_, &colour_meta_, &colour_count_, &c, &arrival_c, &sc);
   };
   // Depth minus colour: on the camera's clock when both frames have its stamps.
   const auto apart_ns = [&] {

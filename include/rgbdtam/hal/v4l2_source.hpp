@@ -152,8 +152,13 @@ class V4l2Source : public LiveSensor {
     bool on_camera_clock = false;
     int64_t stamp_ns = 0;
   };
+  // A stream's last frame as the camera counted it and as the driver numbered it.
+  struct FrameCount {
+    bool seen = false;
+    uint32_t camera = 0, driver = 0;
+  };
   Stamped stamp(V4l2Stream* stream, V4l2MetadataReader* reader, int index, int64_t arrival_ns,
-                uint32_t* last_counter, uint32_t* last_sequence, bool* counted);
+                FrameCount* count);
 
   V4l2Io* io_ = nullptr;
   bool by_usb_ = false;
@@ -166,8 +171,7 @@ class V4l2Source : public LiveSensor {
   V4l2MetadataReader depth_meta_, colour_meta_;
   double camera_clock_hz_ = 0.0;
   DeviceClock camera_clock_;  // one clock: depth and colour come from one camera
-  uint32_t depth_counter_ = 0, depth_sequence_ = 0, colour_counter_ = 0, colour_sequence_ = 0;
-  bool depth_counted_ = false, colour_counted_ = false;
+  FrameCount depth_count_, colour_count_;
   V4l2Colour colour_format_ = V4l2Colour::kYuyv;
   JpegDecoder jpeg_;
   ImageU8 gray_;
