@@ -6,9 +6,10 @@
 #   tools/dither_ensemble.sh <sequence-dir> <config> [--seeds N] [--set key=value]...
 # Prints, per run, live and final-map ATE (cm, all frames), coverage, false-valid and misleading
 # poses, then the copies' mean, median, min and max. Copies go to build/stress/dither/.
+# RGBDTAM_BIN=<binary> tracks with another build (an A/B comparison on the same copies).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bin=build/bin/rgbdtam
+bin=${RGBDTAM_BIN:-build/bin/rgbdtam}
 stress=build/bin/rgbdtam-stress
 [ -x "$bin" ] && [ -x "$stress" ] || { echo "build first: cmake --preset host-release && cmake --build --preset host-release" >&2; exit 1; }
 [ $# -ge 2 ] || { echo "usage: tools/dither_ensemble.sh <sequence-dir> <config> [--seeds N] [--set key=value]..." >&2; exit 2; }

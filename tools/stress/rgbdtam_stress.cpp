@@ -23,6 +23,8 @@ int usage() {
                "  rgbdtam-stress unregister <in> <out> --config <file> [--focal-scale <f>]\n"
                "                [--baseline-m <m>]\n"
                "  rgbdtam-stress dither <in> <out> --config <file> [--seed <n>]\n"
+               "  rgbdtam-stress two-camera <out> [--frames <n>] [--focal-scale <f>]\n"
+               "                [--baseline-m <m>]\n"
                "  rgbdtam-stress pan <out> --peak-deg-s <deg/s> [--frames <n>] [--fps <hz>]\n"
                "  rgbdtam-stress degenerate <out> --scene corridor|room [--frames <n>]\n"
                "  rgbdtam-stress wall <out> --distance-m <m> --yaw-deg <deg> [--frames <n>]\n"
@@ -122,6 +124,8 @@ int main(int argc, char** argv) {
     ok = RepeatedScene::named(scene, &s) && frames >= 2;
     if (!ok) std::fprintf(stderr, "repeated: no scene '%s' (--list names them)\n", scene.c_str());
     ok = ok && repeated_sequence(positional[0], s, frames);
+  } else if (verb == "two-camera" && positional.size() == 1) {
+    ok = two_camera_sequence(positional[0], frames, focal_scale, baseline_m);
   } else if (verb == "pan" && positional.size() == 1) {
     ok = pan_sequence(positional[0], peak, frames, fps);
   } else {

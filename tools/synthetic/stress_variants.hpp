@@ -63,6 +63,13 @@ bool unregister_depth(const std::string& in, const std::string& out, const std::
 // seeds shows how much of an accuracy number is the one draw of noise the recording holds.
 bool dither_depth(const std::string& in, const std::string& out, const std::string& config,
                   unsigned seed);
+// The synthetic room on its diagonal path (parallax around the box) seen by the colour camera and
+// by a depth camera of its own (depth_camera_beside: baseline_m aside, focal_scale times the
+// focal length, under a degree of rotation; pinhole, no distortion): out/exact holds colour
+// with the depth rendered in the colour camera, out/depth_camera the same colour with the depth
+// camera's depth and the keys that register it. Prints how registration compares with the exact
+// depth (pixels filled, errors, near occlusion edges apart).
+bool two_camera_sequence(const std::string& out, int frames, double focal_scale, double baseline_m);
 // A degenerate synthetic scene (SyntheticScene::Layout: "corridor" or "room"), 30 Hz.
 bool degenerate_sequence(const std::string& out, const std::string& layout, int frames);
 
