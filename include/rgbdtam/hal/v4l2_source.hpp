@@ -33,8 +33,8 @@ struct V4l2Counters {
   uint32_t metadata_missing = 0;  // frames whose metadata did not come (stamped on arrival)
   // Frames the camera counted (its frame counter) that never reached the driver: lost in the
   // camera or on the USB, not overtaken here.
-  uint32_t lost_before_driver =
-      0;  // Depth stamp minus colour stamp over the delivered pairs: how far apart the two nodes'
+  uint32_t lost_before_driver = 0;
+  // Depth stamp minus colour stamp over the delivered pairs: how far apart the two nodes'
   // frames are (the sum, for the mean, and the extremes).
   int64_t pair_offset_sum_ns = 0;
   int64_t pair_offset_min_ns = 0;
