@@ -1,5 +1,7 @@
 #include "rgbdtam/hal/uvc_metadata.hpp"
 
+#include "rgbdtam/core/byte_io.hpp"
+
 namespace rgbdtam {
 namespace {
 constexpr size_t kBlockPrefix = 10;  // arrival ns (8) and USB frame number (2)
@@ -7,10 +9,7 @@ constexpr uint8_t kHasPts = 0x04, kHasScr = 0x08;
 constexpr uint32_t kIntelCaptureTiming = 0x80000001u;
 constexpr uint32_t kFrameCounterValid = 0x1;
 
-uint32_t le32(const uint8_t* p) {
-  return static_cast<uint32_t>(p[0]) | static_cast<uint32_t>(p[1]) << 8 |
-         static_cast<uint32_t>(p[2]) << 16 | static_cast<uint32_t>(p[3]) << 24;
-}
+uint32_t le32(const uint8_t* p) { return ByteReader(p, 4).get<uint32_t>(); }
 
 // The camera's own blocks after the standard header: the capture timing's frame counter.
 void parse_vendor_blocks(const uint8_t* p, size_t bytes, UvcFrameMetadata* out) {

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "rgbdtam/core/byte_io.hpp"
 #include "rgbdtam/hal/v4l2_source.hpp"
 
 namespace rgbdtam::testing {
@@ -207,9 +208,7 @@ class FakeV4l2 : public V4l2Io {
   // One uvc_meta_buf block as uvcvideo writes it: arrival ns, USB frame number, then the payload
   // header (length, flags PTS|SCR, PTS, SCR) and, in D4XX, Intel's capture timing block.
   static size_t write_metadata(const Node& n, const Event& e, uint8_t* out) {
-    auto put32 = [](uint8_t* p, uint32_t v) {
-      for (int i = 0; i < 4; ++i) p[i] = static_cast<uint8_t>(v >> (8 * i));
-    };
+    auto put32 = [](uint8_t* p, uint32_t v) { put_le(&p, v); };
     const bool d4xx = n.meta_format == V4L2_META_FMT_D4XX;
     const uint8_t length = d4xx ? 12 + 40 : 12;
     std::memset(out, 0, 10 + length);

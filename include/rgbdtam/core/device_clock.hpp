@@ -23,6 +23,7 @@ class DeviceClock {
   bool running() const { return count_ > 0; }
 
  private:
+  void restart();  // the window and the unwrapped time cleared; the rate kept
   double ns_per_tick_ = 1000.0;
   uint32_t last_ticks_ = 0;
   int64_t device_ns_ = 0;  // the camera's time since the first frame, unwrapped
