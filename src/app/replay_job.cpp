@@ -133,8 +133,8 @@ bool ReplayJob::step() {
   if ((last_pose_.flags & (kPoseValid | kSettling)) != 0) {
     SE3 T_w_k;
     const bool found = system_.keyframe_pose(last_pose_.keyframe_id, &T_w_k);
-    on_keyframes_.push_back(
-        {t_s, last_pose_.keyframe_id, last_pose_.T_w_c, T_w_k.inverse() * last_pose_.T_w_c, found});
+    on_keyframes_.push_back({t_s, last_pose_.keyframe_id, last_pose_.T_w_c,
+                             T_w_k.inverse() * last_pose_.T_w_c_map, found});
   }
   const int64_t t3 = monotonic_ns();
   tracking_ms_.add(t2 - t1);

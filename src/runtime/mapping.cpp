@@ -108,10 +108,10 @@ void MappingModule::remember(const MapperFrame& frame) {
 }
 
 void MappingModule::step(const MapperFrame& frame) {
-  if (frame.reset_counter != reset_counter_) {
+  if (frame.map_epoch != map_epoch_) {
     // The poses jumped (a restart, a relocalisation, a loop correction): what is open was
     // measured in the old frame, so it is finished with the frames it has.
-    reset_counter_ = frame.reset_counter;
+    map_epoch_ = frame.map_epoch;
     earlier_count_ = 0;
     for (Job& job : jobs_) {
       if (job.keyframe != nullptr) finalize(&job);

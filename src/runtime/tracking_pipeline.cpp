@@ -15,6 +15,8 @@ Status TrackingPipeline::init(const Params& params, KeyframePool* keyframes,
   depth_units_.init(params_.sensor);
   frames_.allocate(params_.camera, params_.sensor.depth_factor, params_.sensor.depth_range);
   motion_.init(params_.tracker.motion_model, params_.reset_after_lost_ns);
+  blend_.init({params_.loop.blend_rate_m_per_s, params_.loop.blend_rate_rad_per_s,
+               params_.loop.max_reported_jump_m, params_.loop.max_reported_jump_rad});
   keyframes_.init(params_, keyframes, building, clock);
   Keyframe model;
   keyframes_.allocate_model(&model);
@@ -62,12 +64,13 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
     report(frame.timestamp_ns, &out);
   }
   if (keyframes_.due()) keyframes_.set_due_pose(out);
+  send(&out);
   return out;
 }
 
 void TrackingPipeline::build_pending_keyframe() {
   if (!keyframes_.due()) return;
-  keyframes_.order_pending(frames_, motion_.reset_counter());
+  keyframes_.order_pending(frames_, motion_.map_epoch());
   adopt_built_keyframe();  // built already when synchronous or at once
 }
 
@@ -142,7 +145,7 @@ void TrackingPipeline::start(const SensorFrame& frame, PoseEstimate* out) {
 }
 
 void TrackingPipeline::adopt_built_keyframe() {
-  const Keyframe* kf = keyframes_.adopt_built(motion_.reset_counter());
+  const Keyframe* kf = keyframes_.adopt_built(motion_.map_epoch());
   if (kf == nullptr) return;
   loop_.offer_keyframe(*kf, keyframes_.adopted_link(), keyframes_.adopted_frame());
   keyframes_.release_adopted();
@@ -153,7 +156,13 @@ void TrackingPipeline::adopt_corrections() {
     SE3 delta;
     if (keyframes_.move_by(*c, &delta)) {
       keyframes_.joined();
-      motion_.correct(delta, params_.loop.max_reported_jump_m, params_.loop.max_reported_jump_rad);
+      SE3 sent_jump;
+      if (blend_.absorb(delta, motion_.T_w_last(), &sent_jump)) {
+        motion_.correct_blended(delta);
+      } else {
+        motion_.correct(delta, sent_jump, params_.loop.max_reported_jump_m,
+                        params_.loop.max_reported_jump_rad);
+      }
     }
     loop_.correction_taken();
   }
@@ -329,7 +338,8 @@ void TrackingPipeline::find_in_loaded_map(const SensorFrame& frame, PoseEstimate
   }
   localising_ = false;
   out->reset_counter = motion_.reset_counter();
-  if (!keyframes_.due()) keyframes_.offer_to_mapper(*out, frames_.current(), nullptr);
+  if (!keyframes_.due())
+    keyframes_.offer_to_mapper(*out, motion_.map_epoch(), frames_.current(), nullptr);
   frames_.keep_current();
   motion_.end_frame(true);
 }
@@ -363,13 +373,26 @@ void TrackingPipeline::report(int64_t t_ns, PoseEstimate* out) {
         information_with_jump(out->information, correction.translation_m, correction.rotation_rad);
   }
   // A keyframe's frame goes to the mapper with the keyframe, once built.
-  if (valid && !keyframes_.due()) keyframes_.offer_to_mapper(*out, frames_.current(), nullptr);
+  if (valid && !keyframes_.due())
+    keyframes_.offer_to_mapper(*out, motion_.map_epoch(), frames_.current(), nullptr);
   if (valid && motion_.withheld(t_ns)) {
     out->flags = (out->flags & ~kPoseValid) | kSettling;
     ++counters_.withheld;
   }
   if (valid) frames_.keep_current();  // the last valid frame from now on
   motion_.end_frame(valid);
+}
+
+void TrackingPipeline::send(PoseEstimate* out) {
+  out->T_w_c_map = out->T_w_c;
+  if ((out->flags & kPoseValid) == 0) return;
+  out->T_w_c = blend_.sent(out->T_w_c, out->timestamp_ns, out->reset_counter);
+  if (!blend_.blending() && blend_.last_step_m() == 0.0 && blend_.last_step_rad() == 0.0) return;
+  // The step towards the corrected map is motion the camera did not make: the covariance
+  // covers it, for a consumer that differences the pose with the last one.
+  out->flags |= kBlending;
+  out->information =
+      information_with_jump(out->information, blend_.last_step_m(), blend_.last_step_rad());
 }
 
 TrackingCounters TrackingPipeline::counters() const {

@@ -48,19 +48,37 @@ TEST(MotionState, ALossAfterAPoseFoundWithoutTrackingIsCountedFromItsOwnFirstFra
   EXPECT_EQ(m.lost_for_ns(1122 * kMs), 0) << "... and lost again: a new loss, not the old one";
 }
 
-// A small correction is sent, not withheld: the next pose carries the jump, so that its
+// A small correction sent at once is not withheld: the next pose carries the jump, so that its
 // covariance can cover it.
-TEST(MotionState, ASmallCorrectionIsFlaggedWithHowFarItMovedTheCamera) {
+TEST(MotionState, ASmallCorrectionSentAtOnceIsFlaggedWithHowFarItMovedTheCamera) {
   MotionState m = tracked_until(990 * kMs);
   const SE3 delta(so3_exp(Vector3d(0.0, 0.0, 0.01)), Vector3d(0.012, 0.0, 0.0));
-  m.correct(delta, 0.05, 2.5 * M_PI / 180.0);
-  m.correct(delta, 0.05, 2.5 * M_PI / 180.0);
+  // The camera sits at the world's origin: the poses sent jump by delta.
+  m.correct(delta, delta, 0.05, 2.5 * M_PI / 180.0);
+  m.correct(delta, delta, 0.05, 2.5 * M_PI / 180.0);
   EXPECT_FALSE(m.withheld(1023 * kMs));
   const CorrectionJump jump = m.take_correction();
   EXPECT_EQ(jump.flags, kLoopCorrected | kReset);
-  EXPECT_NEAR(jump.translation_m, 2 * 0.012, 1e-9);  // the camera sits at the world's origin
+  EXPECT_NEAR(jump.translation_m, 2 * 0.012, 1e-9);
   EXPECT_NEAR(jump.rotation_rad, 2 * 0.01, 1e-9);
   EXPECT_EQ(m.take_correction().flags, 0u) << "taken once";
+}
+
+TEST(MotionState, ALargeCorrectionWithholdsTheConsumersWindowAndABlendedOneNothing) {
+  MotionState m = tracked_until(990 * kMs);
+  const uint32_t resets = m.reset_counter();
+  const SE3 delta(Eigen::Quaterniond::Identity(), Vector3d(0.0, 0.08, 0.0));
+  m.correct_blended(delta);
+  EXPECT_NEAR(m.T_w_last().translation().y(), 0.08, 1e-12) << "tracking moves at once";
+  EXPECT_EQ(m.reset_counter(), resets);
+  EXPECT_FALSE(m.withheld(1023 * kMs));
+  EXPECT_EQ(m.take_correction().flags, static_cast<uint32_t>(kLoopCorrected));
+  m.correct(delta, delta, 0.05, 2.5 * M_PI / 180.0);
+  EXPECT_EQ(m.reset_counter(), resets + 1);
+  EXPECT_TRUE(m.withheld(m.last_ns() + kWindowNs));
+  EXPECT_FALSE(m.withheld(m.last_ns() + kWindowNs + 1));
+  EXPECT_EQ(m.counters().loop_corrections, 2u);
+  EXPECT_EQ(m.counters().blended_corrections, 1u);
 }
 
 }  // namespace

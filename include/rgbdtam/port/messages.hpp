@@ -40,9 +40,10 @@ enum PoseFlags : uint32_t {
   kNotInitialised = 1u << 5,  // no keyframe yet (waiting for a frame with depth)
   kKeyframeReused = 1u << 6,  // an earlier keyframe became the reference again (map reuse)
   kRelocalised = 1u << 7,     // lost, then found again in the map (with kReset)
-  kLoopCorrected = 1u << 8,   // a loop closure moved the map (with kReset)
+  kLoopCorrected = 1u << 8,   // a loop closure moved the map (with kReset unless blended in)
   kSettling = 1u << 9,        // tracked, but withheld: too soon after a correction to compare poses
   kLocalising = 1u << 10,     // a map was loaded and this frame is not found in it yet: no pose
+  kBlending = 1u << 11,       // the pose moves onto a corrected map, at most loop.blend_rate
 };
 
 // Pipeline -> trajectory writer, link. One per input frame.
@@ -50,6 +51,9 @@ struct PoseEstimate {
   uint32_t sequence = 0;
   int64_t timestamp_ns = 0;  // colour timestamp of the frame
   SE3 T_w_c;
+  // Tracking's own pose, on the map as corrected now: T_w_c differs from it while a correction is
+  // being blended into the poses sent (kBlending).
+  SE3 T_w_c_map;
   uint32_t flags = 0;
   uint32_t keyframe_id = 0;
   uint32_t reset_counter = 0;
@@ -124,7 +128,7 @@ struct KeyframeHandle {
 // Tracker -> mapper, one per tracked frame. The slot owns its images.
 struct MapperFrame {
   uint32_t sequence = 0;
-  uint32_t reset_counter = 0;  // a change means the poses before it are not comparable
+  uint32_t map_epoch = 0;  // a change means the map moved: the poses before it are in another frame
   int64_t timestamp_ns = 0;
   SE3 T_w_c;
   KeyframeHandle new_keyframe;  // set when this frame became a keyframe (pinned for the mapper)

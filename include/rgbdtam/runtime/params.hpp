@@ -65,6 +65,12 @@ struct LoopParams {
   // the other half to the tracker's own error.
   double max_reported_jump_m = 0.05;
   double max_reported_jump_rad = 2.5 * M_PI / 180.0;
+  // A correction within those limits is not sent as a jump: the poses sent move onto the
+  // corrected map at most this fast (0: at once, with the reset counter). At these rates any
+  // 0.5 s a consumer differences over holds at most one limit's worth, as a jump would, and the
+  // largest correction is taken up within those 0.5 s.
+  double blend_rate_m_per_s = 0.1;
+  double blend_rate_rad_per_s = 5.0 * M_PI / 180.0;
   // A revisit that would move the map further than this fraction of the distance travelled
   // since the earlier place is more than odometry drifts (under 1 % on the development
   // sequences): the two places only look alike (panels, tiles) and neither relocalises or

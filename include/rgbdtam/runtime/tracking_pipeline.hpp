@@ -4,6 +4,7 @@
 // goes through; each concern it touches has one owner (runtime/tracking/):
 //   FrameBuffers      the current frame and the last valid one
 //   MotionState       last pose, time, velocity, validity, prediction, restart, correction
+//   CorrectionBlend   small loop corrections taken up gradually by the poses sent
 //   MotionPriors      other sensors' motion (the autopilot's rotation), where priors plug in
 //   PoseSearch        the tracker, its guesses and the health checks
 //   KeyframeHandover  the reference keyframe, building, adopting and mapping keyframes
@@ -19,6 +20,7 @@
 #include "rgbdtam/runtime/loop_closing.hpp"
 #include "rgbdtam/runtime/mapping.hpp"
 #include "rgbdtam/runtime/params.hpp"
+#include "rgbdtam/runtime/tracking/correction_blend.hpp"
 #include "rgbdtam/runtime/tracking/depth_units_guard.hpp"
 #include "rgbdtam/runtime/tracking/frame_buffers.hpp"
 #include "rgbdtam/runtime/tracking/keyframe_handover.hpp"
@@ -111,6 +113,8 @@ class TrackingPipeline {
   void find_in_loaded_map(const SensorFrame& frame, PoseEstimate* out);
   void on_lost(const SensorFrame& frame, uint32_t failed, PoseEstimate* out);
   void report(int64_t t_ns, PoseEstimate* out);
+  // The pose goes out as the consumers see it: a correction being blended in (CorrectionBlend).
+  void send(PoseEstimate* out);
 
   Params params_;
   Undistorter undistorter_;
@@ -118,6 +122,7 @@ class TrackingPipeline {
   FrozenDepthCheck frozen_depth_;
   DepthUnitsGuard depth_units_;
   MotionState motion_;
+  CorrectionBlend blend_;
   MotionPriors priors_;
   PoseSearch search_;
   KeyframeHandover keyframes_;

@@ -77,7 +77,7 @@ bool KeyframeHandover::ask(const SE3& T_w_k, const KeyframeLink& link, bool to_m
   return true;
 }
 
-void KeyframeHandover::order_pending(const FrameBuffers& frames, uint32_t reset_counter) {
+void KeyframeHandover::order_pending(const FrameBuffers& frames, uint32_t map_epoch) {
   if (!pending_.due) return;
   pending_.due = false;
   const FramePyramid& f = frames.slot(pending_.frame_buffer);
@@ -94,7 +94,7 @@ void KeyframeHandover::order_pending(const FrameBuffers& frames, uint32_t reset_
     m.points.clear();
     for (const MapPoint& p : local_maps_[i].points) (void)m.points.push_back(p);
   }
-  pending_.reset_counter = reset_counter;
+  pending_.map_epoch = map_epoch;
   KeyframeOrder order;
   order.id = next_keyframe_id_++;
   order.timestamp_ns = pending_.pose.timestamp_ns;
@@ -105,9 +105,9 @@ void KeyframeHandover::order_pending(const FrameBuffers& frames, uint32_t reset_
   building_->submit(order, reference_ == nullptr);
 }
 
-Keyframe* KeyframeHandover::adopt_built(uint32_t reset_counter) {
+Keyframe* KeyframeHandover::adopt_built(uint32_t map_epoch) {
   if (!building_->built()) return nullptr;
-  if (pending_.reset_counter != reset_counter) {
+  if (pending_.map_epoch != map_epoch) {
     // Its pose is from before the map moved (a restart, relocalisation or loop correction).
     ++counters_.keyframes_stale;
     building_->release();
@@ -122,7 +122,9 @@ Keyframe* KeyframeHandover::adopt_built(uint32_t reset_counter) {
 }
 
 void KeyframeHandover::release_adopted() {
-  if (pending_.to_mapper) offer_to_mapper(pending_.pose, building_->frame(), &building_->edges());
+  if (pending_.to_mapper) {
+    offer_to_mapper(pending_.pose, pending_.map_epoch, building_->frame(), &building_->edges());
+  }
   building_->release();
 }
 
@@ -139,8 +141,8 @@ void KeyframeHandover::adopt_all_maps() {
   for (int i = 0; i < pool_->size(); ++i) adopt_map(&pool_->at(i));
 }
 
-void KeyframeHandover::offer_to_mapper(const PoseEstimate& pose, const FramePyramid& f,
-                                       const ImageU8* keyframe_edges) {
+void KeyframeHandover::offer_to_mapper(const PoseEstimate& pose, uint32_t map_epoch,
+                                       const FramePyramid& f, const ImageU8* keyframe_edges) {
   if (mapper_queue_ == nullptr) return;
   const bool new_keyframe = keyframe_edges != nullptr;
   MapperFrame* slot = mapper_queue_->begin_push();
@@ -150,7 +152,7 @@ void KeyframeHandover::offer_to_mapper(const PoseEstimate& pose, const FramePyra
     return;
   }
   slot->sequence = pose.sequence;
-  slot->reset_counter = pose.reset_counter;
+  slot->map_epoch = map_epoch;
   slot->timestamp_ns = pose.timestamp_ns;
   slot->T_w_c = pose.T_w_c;
   std::memcpy(slot->gray.data(), f.gray(0).data(), sizeof(float) * slot->gray.size());

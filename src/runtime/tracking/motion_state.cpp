@@ -59,6 +59,7 @@ int64_t MotionState::lost_for_ns(int64_t t_ns) {
 }
 
 void MotionState::restart(int64_t t_ns) {
+  ++map_epoch_;
   lost_since_ns_ = -1;
   last_ns_ = t_ns;
   velocity_.setZero();
@@ -67,23 +68,30 @@ void MotionState::restart(int64_t t_ns) {
   ++counters_.resets;
 }
 
-void MotionState::correct(const SE3& delta, double max_reported_jump_m,
+void MotionState::correct(const SE3& delta, const SE3& sent_jump, double max_reported_jump_m,
                           double max_reported_jump_rad) {
-  const SE3 before = T_w_last_;
   T_w_last_ = delta * T_w_last_;
   // Poses either side of a large jump are not comparable: as after a restart, none is
   // reported over the window in which a consumer differences poses.
-  const SE3 jump = before.inverse() * T_w_last_;
-  const double jump_m = jump.translation().norm();
-  const double jump_rad = so3_log(jump.quaternion()).norm();
+  const double jump_m = sent_jump.translation().norm();
+  const double jump_rad = so3_log(sent_jump.quaternion()).norm();
   if (jump_m > max_reported_jump_m || jump_rad > max_reported_jump_rad) {
     withhold_until_ns_ = last_ns_ + reset_after_lost_ns_;
   }
   ++reset_counter_;
+  ++map_epoch_;
   ++counters_.loop_corrections;
   correction_.flags |= kLoopCorrected | kReset;
   correction_.translation_m += jump_m;
   correction_.rotation_rad += jump_rad;
+}
+
+void MotionState::correct_blended(const SE3& delta) {
+  ++map_epoch_;
+  T_w_last_ = delta * T_w_last_;
+  ++counters_.loop_corrections;
+  ++counters_.blended_corrections;
+  correction_.flags |= kLoopCorrected;
 }
 
 void MotionState::jumped(int64_t last_valid_ns) {
@@ -93,6 +101,7 @@ void MotionState::jumped(int64_t last_valid_ns) {
     withhold_until_ns_ = std::max(withhold_until_ns_, last_valid_ns + reset_after_lost_ns_);
   }
   ++reset_counter_;
+  ++map_epoch_;
 }
 
 CorrectionJump MotionState::take_correction() {

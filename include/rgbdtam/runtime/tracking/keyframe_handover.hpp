@@ -73,14 +73,14 @@ class KeyframeHandover {
   bool ask(const SE3& T_w_k, const KeyframeLink& link, bool to_mapper, int frame_slot,
            PoseEstimate* out);
   bool due() const { return pending_.due; }
-  // The asking frame's pose, as it went out: offered to the mapper with the keyframe.
+  // The asking frame's pose, as tracking measured it: offered to the mapper with the keyframe.
   void set_due_pose(const PoseEstimate& pose) { pending_.pose = pose; }
-  // Orders the keyframe asked for, if one is due; reset_counter: the estimate's now (a reset
-  // before it is built makes it stale).
-  void order_pending(const FrameBuffers& frames, uint32_t reset_counter);
+  // Orders the keyframe asked for, if one is due; map_epoch: the map's now (MotionState: a map
+  // moved before it is built makes it stale).
+  void order_pending(const FrameBuffers& frames, uint32_t map_epoch);
   // Once built: the keyframe in its pool slot as the new reference (null when none is built,
   // or it was stale). Its link and frame stay readable until release_adopted().
-  Keyframe* adopt_built(uint32_t reset_counter);
+  Keyframe* adopt_built(uint32_t map_epoch);
   const KeyframeLink& adopted_link() const { return pending_.link; }
   const FramePyramid& adopted_frame() const { return building_->frame(); }
   // The adopted keyframe goes to the mapper (if it asked to be mapped); the builder is free.
@@ -92,8 +92,9 @@ class KeyframeHandover {
   // sensor-blind pixels must be the newest, and the mapper may finish a keyframe after the
   // tracker has moved on from it.
   void adopt_all_maps();
-  // A valid frame for the mapper (keyframe_edges: it is the new reference, with these edges).
-  void offer_to_mapper(const PoseEstimate& pose, const FramePyramid& f,
+  // A valid frame for the mapper, its pose on the map of map_epoch (keyframe_edges: it is the new
+  // reference, with these edges).
+  void offer_to_mapper(const PoseEstimate& pose, uint32_t map_epoch, const FramePyramid& f,
                        const ImageU8* keyframe_edges);
 
   // Moves each keyframe the correction knows to its corrected pose, and newer ones with the
@@ -121,8 +122,8 @@ class KeyframeHandover {
     SE3 T_w_k;
     KeyframeLink link;
     bool to_mapper = false;
-    PoseEstimate pose;           // the frame's, offered to the mapper with the keyframe
-    uint32_t reset_counter = 0;  // when ordered: a reset or correction since makes it stale
+    PoseEstimate pose;       // the frame's, offered to the mapper with the keyframe
+    uint32_t map_epoch = 0;  // when ordered: the map moved since makes it stale
   };
 
   KeyframePool* pool_ = nullptr;

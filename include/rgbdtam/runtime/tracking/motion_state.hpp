@@ -1,8 +1,10 @@
 #pragma once
 // The camera's motion as tracking knows it: the last valid pose, its time and the twist before
 // it (the prediction), whether the frame before this one was valid, since when tracking has
-// been lost, and the reset counter that tells consumers when two poses stop being comparable
-// (a restart, a relocalisation, a loop correction). Every write of these is here.
+// been lost, the reset counter that tells consumers when two poses sent stop being comparable
+// (a restart, a relocalisation, a loop correction sent at once), and the map epoch that tells
+// the mapper and the keyframe builder when the map moved (those, and a correction blended in).
+// Every write of these is here.
 // Thread: the tracker's.
 
 #include <cstdint>
@@ -21,8 +23,9 @@ struct CorrectionJump {
 };
 
 struct MotionCounters {
-  uint32_t resets = 0;            // restarts after a loss
-  uint32_t loop_corrections = 0;  // loop closures that moved the camera's world
+  uint32_t resets = 0;               // restarts after a loss
+  uint32_t loop_corrections = 0;     // loop closures that moved the camera's world
+  uint32_t blended_corrections = 0;  // ... of which the poses sent took up gradually
 };
 
 class MotionState {
@@ -40,6 +43,9 @@ class MotionState {
   // the camera's acceleration.
   bool has_velocity() const { return has_velocity_; }
   uint32_t reset_counter() const { return reset_counter_; }
+  // Steps whenever the camera's world moved (a restart, a relocalisation, any loop correction,
+  // blended or not): what was measured before is in another frame.
+  uint32_t map_epoch() const { return map_epoch_; }
   double seconds_since_last(int64_t t_ns) const {
     return static_cast<double>(t_ns - last_ns_) * 1e-9;
   }
@@ -67,9 +73,13 @@ class MotionState {
   // poses before and after are not comparable, and none is reported valid while a consumer
   // could difference it with that one.
   void jumped(int64_t last_valid_ns);
-  // A loop correction moved the camera's world by delta (T_w'_w). A jump larger than the limits
-  // withholds poses while consumers could difference them across it.
-  void correct(const SE3& delta, double max_reported_jump_m, double max_reported_jump_rad);
+  // A loop correction moved the camera's world by delta (T_w'_w), and the poses sent jump with it
+  // by sent_jump: the reset counter steps, and a jump larger than the limits withholds poses
+  // while consumers could difference them across it.
+  void correct(const SE3& delta, const SE3& sent_jump, double max_reported_jump_m,
+               double max_reported_jump_rad);
+  // A loop correction the poses sent take up gradually (CorrectionBlend): no jump, no reset.
+  void correct_blended(const SE3& delta);
   // The corrections since the last frame, for the next output; cleared.
   CorrectionJump take_correction();
   // A tracked pose at t_ns is not reported valid: too soon after a large correction or a jump.
@@ -90,6 +100,7 @@ class MotionState {
   bool previous_valid_ = false;
   int64_t lost_since_ns_ = -1;  // the first lost frame of the current loss; -1 when tracking
   uint32_t reset_counter_ = 0;
+  uint32_t map_epoch_ = 0;
   CorrectionJump correction_;
   int64_t withhold_until_ns_ = 0;
   MotionCounters counters_;
