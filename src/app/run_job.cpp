@@ -397,9 +397,9 @@ void print_v4l2_summary(const V4l2Source& v4l2) {
   if (v4l2.reads_metadata()) {
     std::printf(
         " (metadata %s %s: %u pairs on the camera's clock, %u frames without metadata, "
-        "%u frames lost before the driver)",
+        "%u metadata buffers flagged as errors, %u frames lost before the driver)",
         n.depth_metadata, n.colour_metadata, c.camera_stamped, c.metadata_missing,
-        c.lost_before_driver);
+        c.metadata_errors, c.lost_before_driver);
   } else if (n.depth_metadata[0] != '\0' || n.colour_metadata[0] != '\0') {
     std::printf(" (their metadata nodes, not read without sensor.clock_hz: %s %s)",
                 n.depth_metadata, n.colour_metadata);

@@ -282,14 +282,18 @@ void V4l2Stream::close() {
 }
 
 bool V4l2MetadataReader::find(uint32_t sequence, V4l2Counters* counters, UvcFrameMetadata* out) {
+  V4l2Counters node;
   for (int index = -1;;) {
-    if (!stream_.take_oldest(&index, counters).is_ok() || index < 0) break;
+    if (!stream_.take_oldest(&index, &node).is_ok() || index < 0) break;
     Kept& k = kept_[next_];
     next_ = (next_ + 1) % kKept;
     k.sequence = stream_.sequence(index);
     k.valid = parse_uvc_metadata(stream_.data(index), stream_.bytes_used(index), &k.metadata);
-    if (!stream_.release(index, counters).is_ok()) break;
+    if (!stream_.release(index, &node).is_ok()) break;
   }
+  counters->metadata_errors += node.error_buffers;
+  counters->requeue_failures += node.requeue_failures;
+  counters->retries += node.retries;
   for (const Kept& k : kept_) {
     if (k.valid && k.sequence == sequence) {
       *out = k.metadata;

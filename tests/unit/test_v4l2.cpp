@@ -355,7 +355,8 @@ TEST(V4l2Nodes, AResetThatRenumbersTheNodesIsFollowedAtTheReopen) {
 // capture on the camera's clock (microseconds) and the camera's frame counter.
 struct CameraClockScript {
   static constexpr int kFrames = 12;
-  static constexpr int kMissingColourMetadata = 9;
+  // Its colour metadata comes flagged as an error (uvcvideo flags it with a bad frame's).
+  static constexpr int kFlaggedColourMetadata = 9;
   const int64_t depth_late_ms[kFrames] = {0, 7, 2, 9, 4, 11, 6, 1, 8, 0, 10, 5};
   const int64_t colour_late_ms[kFrames] = {0, 5, 1, 6, 2, 7, 3, 0, 4, 0, 5, 2};
   // Colour is captured at 1000 + 33 k ms, depth 1 ms after it; depth's transfer takes 8 ms at
@@ -378,7 +379,8 @@ struct CameraClockScript {
       d.frame_counter = static_cast<uint32_t>(k + (k >= 6 ? 2 : 0));
       c.frame_counter = static_cast<uint32_t>(k);
       depth_meta.script.push_back(d);
-      if (k != kMissingColourMetadata) colour_meta.script.push_back(c);
+      if (k == kFlaggedColourMetadata) c.kind = Event::kErrorFlag;
+      colour_meta.script.push_back(c);
     }
   }
 };
@@ -400,7 +402,7 @@ TEST(V4l2Nodes, TheMetadataNodesStampAndPairFramesOnTheCamerasClock) {
     EXPECT_EQ(f.depth[0], 100 * k) << "depth and colour of one instant";
     EXPECT_EQ(f.gray[0], k);
     if (k == 0) continue;  // the clock learns the transfer from the first pair
-    if (k == CameraClockScript::kMissingColourMetadata) {
+    if (k == CameraClockScript::kFlaggedColourMetadata) {
       // Stamped on arrival: 1 ms apart at capture, 6 ms apart on arrival.
       EXPECT_EQ(f.depth_timestamp_ns - f.timestamp_ns, 6 * kMs);
       continue;
@@ -413,6 +415,8 @@ TEST(V4l2Nodes, TheMetadataNodesStampAndPairFramesOnTheCamerasClock) {
   EXPECT_EQ(c.unpaired, 0u);
   EXPECT_EQ(c.camera_stamped, static_cast<uint32_t>(CameraClockScript::kFrames - 1));
   EXPECT_EQ(c.metadata_missing, 1u);
+  EXPECT_EQ(c.metadata_errors, 1u);
+  EXPECT_EQ(c.error_buffers, 0u) << "the frame itself was fine: not counted as an error buffer";
   EXPECT_EQ(c.lost_before_driver, 2u);
 
   // By arrival alone the same frames drift apart: pairs are broken and frames let go.

@@ -31,6 +31,9 @@ struct V4l2Counters {
   uint32_t requeue_failures = 0;  // VIDIOC_QBUF refused: the buffer is queued again later
   uint32_t camera_stamped = 0;    // pairs stamped and paired on the camera's clock
   uint32_t metadata_missing = 0;  // frames whose metadata did not come (stamped on arrival)
+  // Metadata buffers flagged as errors (uvcvideo flags them with their frame's): counted here,
+  // not in error_buffers, so that one bad frame counts once there.
+  uint32_t metadata_errors = 0;
   // Frames the camera counted (its frame counter) that never reached the driver: lost in the
   // camera or on the USB, not overtaken here.
   uint32_t lost_before_driver = 0;
