@@ -10,14 +10,14 @@ void print_loop_summary(const SlamSystem& system) {
   const TrackingCounters& c = system.tracking().counters();
   std::printf(
       "loop: %u places (the store keeps %d; %u forgotten); %u views aligned with theirs: %u "
-      "revisit edges (loops), %u covisible edges; %u reuse edges; %u corrections (%u adopted, %u "
-      "blended into the poses sent, %u dropped; %u poses withheld after them); %u relocalised (%u "
-      "on a new keyframe, %u at places older than the dense pool); %u keyframes dropped at the "
-      "queue; ms per keyframe: describe "
-      "median %.1f, search median %.1f p95 %.1f, pose graph max %.1f\n",
+      "revisit edges (loops), %u covisible edges; %u window edges, %u reuse edges; %u corrections "
+      "(%u adopted, %u blended into the poses sent, %u dropped; %u poses withheld after them); %u "
+      "relocalised (%u on a new keyframe, %u at places older than the dense pool); %u keyframes "
+      "dropped at the queue; ms per keyframe: describe median %.1f, search median %.1f p95 %.1f, "
+      "pose graph max %.1f\n",
       l.keyframes, system.places().capacity(), system.places().evicted(), l.candidates,
-      l.revisit_edges, l.covisible_edges, l.reuse_edges, l.corrections, c.loop_corrections,
-      c.blended_corrections, l.corrections_dropped, c.withheld, c.relocalised,
+      l.revisit_edges, l.covisible_edges, l.window_edges, l.reuse_edges, l.corrections,
+      c.loop_corrections, c.blended_corrections, l.corrections_dropped, c.withheld, c.relocalised,
       c.relocalised_on_new_keyframe, c.relocalised_past_the_pool, c.loop_dropped_keyframes,
       system.loop().describe_time().percentile_ms(0.5),
       system.loop().search_time().percentile_ms(0.5),

@@ -145,6 +145,23 @@ void LoopModule::add_keyframe(const LoopKeyframe& keyframe) {
   }
   bool correct = false;
   measure_hops(query_handle.slot);
+  // The local window: the tracker's second measurement, against an earlier keyframe a few
+  // measured edges away, refines the map at smaller disagreements than a revisit corrects it.
+  // Further away, or across a restart, it would close a loop unverified; on an image that
+  // repeats, it may be a period off.
+  bool refine = false;
+  const int window = store_->order_of(keyframe.window_id);
+  if (!keyframe.window_information.isZero() && window >= 0 && !keyframe.repeats) {
+    const PlaceHandle window_handle = store_->handle(window);
+    const int hops = hops_[window_handle.slot];
+    if (hops >= 2 && hops <= kCovisibleHops && !store_->at_slot(window_handle.slot).repeats) {
+      refine = add_edge({window_handle, query_handle, keyframe.T_window_keyframe,
+                         keyframe.window_information, EdgeKind::kCovisible},
+                        window_limit());
+      ++counters_.window_edges;
+      measure_hops(query_handle.slot);  // the window's place is now a neighbour, not a candidate
+    }
+  }
   PlaceCandidate candidates[CandidateBudget::kTotal];
   // A keyframe whose image repeats along a surface does not say where along it a match is.
   const int n = keyframe.repeats ? 0 : choose_candidates(query_handle.slot, candidates);
@@ -199,7 +216,11 @@ void LoopModule::add_keyframe(const LoopKeyframe& keyframe) {
     ++(revisit ? counters_.revisit_edges : counters_.covisible_edges);
   }
   search_time_.add(clock_() - t1);
-  if (correct) optimise();
+  if (correct) {
+    optimise(correction_limit());
+  } else if (refine) {
+    optimise(window_limit());
+  }
 }
 
 bool LoopModule::within_drift(int place_slot, int query, const ViewAlignment& a) const {
@@ -227,7 +248,7 @@ void LoopModule::add_reuse(const LoopKeyframe& message) {
   ++counters_.reuse_edges;
   if (add_edge({store_->handle(from), store_->handle(to), message.T_reference_keyframe,
                 message.information, EdgeKind::kReuse})) {
-    optimise();
+    optimise(correction_limit());
   }
 }
 
@@ -247,7 +268,7 @@ void LoopModule::remember(const LoopKeyframe& keyframe, const SE3& T_w_k) {
   ++counters_.keyframes;
 }
 
-bool LoopModule::add_edge(const Edge& edge) {
+bool LoopModule::add_edge(const Edge& edge, const MoveLimit& limit) {
   if (edges_.size() == edges_.capacity()) {
     // Full: forget the edges of forgotten places.
     int kept = 0;
@@ -266,9 +287,7 @@ bool LoopModule::add_edge(const Edge& edge) {
     observer_->on_edge({from->keyframe_id, to->keyframe_id, edge.T_from_to, edge.kind});
   }
   if (edge.kind == EdgeKind::kRestart) return false;
-  const SE3 disagreement = (from->T_w_k * edge.T_from_to).inverse() * to->T_w_k;
-  return disagreement.translation().norm() > params_.loop.min_correction_m ||
-         so3_log(disagreement.quaternion()).norm() > params_.loop.min_correction_rad;
+  return limit.exceeded_by((from->T_w_k * edge.T_from_to).inverse() * to->T_w_k);
 }
 
 void LoopModule::measure_hops(int slot) {
@@ -374,7 +393,19 @@ int LoopModule::choose_candidates(int query_slot, PlaceCandidate* out) {
   return n;
 }
 
-void LoopModule::optimise() {
+bool LoopModule::MoveLimit::exceeded_by(const SE3& d) const {
+  return d.translation().norm() > m || so3_log(d.quaternion()).norm() > rad;
+}
+
+LoopModule::MoveLimit LoopModule::correction_limit() const {
+  return {params_.loop.min_correction_m, params_.loop.min_correction_rad};
+}
+
+LoopModule::MoveLimit LoopModule::window_limit() const {
+  return {params_.loop.min_window_correction_m, params_.loop.min_window_correction_rad};
+}
+
+void LoopModule::optimise(const MoveLimit& send_beyond) {
   const int64_t t0 = clock_();
   graph_.clear();
   graph_.set_fixed(store_->kept());  // a map localised in stays as it was saved
@@ -391,9 +422,7 @@ void LoopModule::optimise() {
   // Sent only when it moves the map: each correction resets the consumers' estimate.
   bool moved = false;
   for (int i = 0; i < n && !moved; ++i) {
-    const SE3 d = store_->in_order(i).T_w_k.inverse() * graph_.pose(i);
-    moved = d.translation().norm() > params_.loop.min_correction_m ||
-            so3_log(d.quaternion()).norm() > params_.loop.min_correction_rad;
+    moved = send_beyond.exceeded_by(store_->in_order(i).T_w_k.inverse() * graph_.pose(i));
   }
   LoopCorrection* out = moved ? corrections_->begin_push() : nullptr;
   if (moved && out == nullptr)

@@ -200,6 +200,16 @@ const KeySpec kSpecs[] = {
      RGBDTAM_FIELD(loop.min_correction_m), false},
     {"loop.min_correction_angle", ValueType::kDegreesAsRadians, 0, 180, "deg",
      "... or beyond this angle", RGBDTAM_FIELD(loop.min_correction_rad), false},
+    {"loop.window", ValueType::kBool, 0, 1, "",
+     "track each new keyframe also against the earlier keyframe that sees most of it, and refine "
+     "the map with that measurement",
+     RGBDTAM_FIELD(loop.window), false},
+    {"loop.min_window_correction", ValueType::kReal, 0, 10, "m",
+     "that measurement refines the map when it disagrees with it beyond this, and the refined map "
+     "is sent when some keyframe moved further",
+     RGBDTAM_FIELD(loop.min_window_correction_m), false},
+    {"loop.min_window_correction_angle", ValueType::kDegreesAsRadians, 0, 180, "deg",
+     "... or beyond this angle", RGBDTAM_FIELD(loop.min_window_correction_rad), false},
     {"loop.max_reported_jump", ValueType::kReal, 0, 10, "m",
      "a correction moving the camera further is sent at once, with the reset counter, and "
      "withholds poses for health.reset_after_lost_ms",

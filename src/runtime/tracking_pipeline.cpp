@@ -147,7 +147,8 @@ void TrackingPipeline::start(const SensorFrame& frame, PoseEstimate* out) {
 void TrackingPipeline::adopt_built_keyframe() {
   const Keyframe* kf = keyframes_.adopt_built(motion_.map_epoch());
   if (kf == nullptr) return;
-  loop_.offer_keyframe(*kf, keyframes_.adopted_link(), keyframes_.adopted_frame());
+  loop_.offer_keyframe(*kf, keyframes_.adopted_link(), keyframes_.adopted_window_link(),
+                       keyframes_.adopted_frame());
   keyframes_.release_adopted();
 }
 
@@ -224,23 +225,30 @@ void TrackingPipeline::accept(const Attempt& a, const SensorFrame& frame, PoseEs
   const bool new_view = r.overlap < params_.tracker.keyframe_overlap || moved;
   if (keyframes_.building()) {
     keyframes_.count_frame_awaiting();
-  } else if (new_view && !reuse_keyframe(a, frame.timestamp_ns, out) &&
-             frames_.current().has_depth()) {
-    (void)keyframes_.ask(out->T_w_c, keyframes_.odometry_link(out->T_w_c, out->information), true,
-                         frames_.current_slot(), out);
+  } else if (new_view) {
+    KeyframeLink window;
+    if (!reuse_keyframe(a, frame.timestamp_ns, out, &window) && frames_.current().has_depth()) {
+      (void)keyframes_.ask(out->T_w_c, keyframes_.odometry_link(out->T_w_c, out->information), true,
+                           frames_.current_slot(), out, window);
+    }
   }
 }
 
-bool TrackingPipeline::reuse_keyframe(const Attempt& current, int64_t t_ns, PoseEstimate* out) {
+bool TrackingPipeline::reuse_keyframe(const Attempt& current, int64_t t_ns, PoseEstimate* out,
+                                      KeyframeLink* window) {
   // The earlier keyframes nearest to the camera, ranked by what they see of this frame at the
-  // current estimate; the best is tracked.
+  // current estimate; the best is tracked. For the local window it is tracked when it sees half
+  // of the frame, as two views must to show one place (shows_same_place).
   constexpr int kMaxCandidates = 16;
+  constexpr double kWindowVisible = 0.5;
   const SE3 T_w_c = current.T_w_c();
   Keyframe* candidates[kMaxCandidates];
   const int count =
       keyframes_.nearest(T_w_c, std::min(params_.reuse_candidates, kMaxCandidates), candidates);
+  const double overlap = params_.tracker.keyframe_overlap;
+  const bool window_on = params_.loop.window && loop_.has_places();
   Keyframe* best = nullptr;
-  double best_visible = params_.tracker.keyframe_overlap;
+  double best_visible = window_on ? std::min(kWindowVisible, overlap) : overlap;
   for (int i = 0; i < count; ++i) {
     keyframes_.adopt_map(candidates[i]);
     const double visible = search_.visible_at(*candidates[i], frames_.current(),
@@ -257,8 +265,16 @@ bool TrackingPipeline::reuse_keyframe(const Attempt& current, int64_t t_ns, Pose
   // is the price of its smaller drift (asking for the overlap too left 89 keyframes instead of
   // about 30 on fr1_xyz, and 1.15 cm all-frames ATE).
   const Attempt reused = search_.track(best, frames_.current(), T_w_c, motion_, t_ns);
-  if (reused.failed != 0 || reused.r.visible < params_.tracker.keyframe_overlap ||
+  if (reused.failed != 0 || best_visible < overlap || reused.r.visible < overlap ||
       reused.r.parallax > params_.tracker.keyframe_parallax) {
+    // Not taken up: the new keyframe is measured against it too, as against its reference.
+    if (reused.failed == 0 && window_on) {
+      window->reference_id = best->id;
+      window->kind = EdgeKind::kCovisible;
+      window->T_reference_keyframe = reused.r.T_k_c;
+      window->information = graph_information(reused.r.information / params_.covariance_scale,
+                                              window->T_reference_keyframe);
+    }
     return false;
   }
   loop_.offer_reuse(current, reused, params_.covariance_scale);

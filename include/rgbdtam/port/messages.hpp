@@ -101,6 +101,12 @@ struct LoopKeyframe {
   // perturbation T_reference_keyframe exp(xi), xi = (v, omega); zero for a restart.
   SE3 T_reference_keyframe;
   Matrix6d information = Matrix6d::Zero();
+  // The local window's second measurement: the keyframe's frame tracked at full resolution, as
+  // against its reference, against an earlier keyframe that sees much of it; zero information
+  // when there is none.
+  uint32_t window_id = 0;
+  SE3 T_window_keyframe;
+  Matrix6d window_information = Matrix6d::Zero();
   ImageF gray;           // level 0, undistorted, [0,1]
   ImageF inverse_depth;  // level 0 sensor inverse depth, 1/m
   View view;             // the pyramid's view level, remembered with the place

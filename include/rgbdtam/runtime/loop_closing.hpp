@@ -10,9 +10,10 @@
 //   - revisits by appearance: the bag of words' best places outside the keyframe's
 //     neighbourhood, or in a stretch the graph does not join at all (after a restart), with
 //     the features' RANSAC as the first guess.
-// The tracker's reuse of an earlier keyframe is an edge too. An edge that disagrees with the
-// map optimises the SE(3) pose graph of all places, and the corrected poses go to the tracker
-// as a LoopCorrection it adopts between frames.
+// The tracker's reuse of an earlier keyframe is an edge too, and so is its local window's second
+// measurement of a keyframe, against an earlier one, at full resolution. An edge that disagrees
+// with the map optimises the SE(3) pose graph of all places, and the corrected poses go to the
+// tracker as a LoopCorrection it adopts between frames.
 // step() is the same code synchronously (replay) or on its own thread (WorkerThread); after
 // init() nothing allocates.
 
@@ -41,6 +42,7 @@ struct LoopCounters {
   uint32_t keyframes = 0;        // described and remembered
   uint32_t candidates = 0;       // places whose views were aligned with a keyframe's
   uint32_t covisible_edges = 0;  // ... verified: a neighbour
+  uint32_t window_edges = 0;     // the tracker's second measurement of a keyframe (local window)
   uint32_t revisit_edges = 0;    // ... verified: a revisit (a loop)
   uint32_t reuse_edges = 0;      // the tracker took up an earlier keyframe
   uint32_t edges_dropped = 0;    // the graph's edge store was full
@@ -112,8 +114,16 @@ class LoopModule {
   void add_keyframe(const LoopKeyframe& keyframe);
   void add_reuse(const LoopKeyframe& message);
   void remember(const LoopKeyframe& keyframe, const SE3& T_w_k);
-  // Adds the edge; returns whether it disagrees with the map by more than loop.min_correction.
-  bool add_edge(const Edge& edge);
+  // How far the map must move to be refined (an edge disagreeing with it) or sent (a place moved).
+  struct MoveLimit {
+    double m, rad;
+    bool exceeded_by(const SE3& d) const;
+  };
+  MoveLimit correction_limit() const;  // loop.min_correction
+  MoveLimit window_limit() const;      // loop.min_window_correction
+  // Adds the edge; returns whether it disagrees with the map by more than the limit.
+  bool add_edge(const Edge& edge, const MoveLimit& limit);
+  bool add_edge(const Edge& edge) { return add_edge(edge, correction_limit()); }
   // Graph distance (edges with a measurement) of every place from the one in `slot`; -1 where
   // the graph does not join them.
   // A revisit of the place at place_slot by the newest place (order query), aligned by a, asks
@@ -121,7 +131,8 @@ class LoopModule {
   bool within_drift(int place_slot, int query, const ViewAlignment& a) const;
   void measure_hops(int slot);
   int choose_candidates(int query_slot, PlaceCandidate* out);
-  void optimise();
+  // Optimises the graph and sends the map if some place moved beyond the limit.
+  void optimise(const MoveLimit& send_beyond);
 
   Params params_;
   const Vocabulary* vocabulary_ = nullptr;

@@ -59,6 +59,15 @@ struct LoopParams {
   // optimised map is sent to the tracker when some place moved by more than this.
   double min_correction_m = 0.02;
   double min_correction_rad = 1.0 * M_PI / 180.0;
+  // The local window: each new keyframe's frame is also tracked, at full resolution, against the
+  // earlier keyframe that sees most of it, and that measurement refines the map when it
+  // disagrees with it by more than these; the refined map is sent when some keyframe moved
+  // further. Small: a correction within max_reported_jump is blended into the poses sent. Off:
+  // on dithered copies it helped two stress variants and cost four other sequences
+  // (docs/loop-closure.md, "The local window").
+  bool window = false;
+  double min_window_correction_m = 0.002;
+  double min_window_correction_rad = 0.1 * M_PI / 180.0;
   // A correction that moves the camera further than this is a jump a consumer differencing
   // poses would take for motion: the poses after it are withheld for that window
   // (reset_after_lost). Half the false-valid tolerance (10 cm, 5 degrees over 0.5 s), leaving

@@ -63,7 +63,7 @@ KeyframeLink KeyframeHandover::restart_link() const {
 }
 
 bool KeyframeHandover::ask(const SE3& T_w_k, const KeyframeLink& link, bool to_mapper,
-                           int frame_slot, PoseEstimate* out) {
+                           int frame_slot, PoseEstimate* out, const KeyframeLink& window) {
   if (building()) return false;
   // Ordered after the pose is out (order_pending), from this frame's buffer, which the next
   // frame leaves alone until then.
@@ -73,6 +73,7 @@ bool KeyframeHandover::ask(const SE3& T_w_k, const KeyframeLink& link, bool to_m
   pending_.frame_buffer = frame_slot;
   pending_.T_w_k = T_w_k;
   pending_.link = link;
+  pending_.window = window;
   pending_.to_mapper = to_mapper;
   return true;
 }

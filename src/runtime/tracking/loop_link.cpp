@@ -22,7 +22,8 @@ LoopKeyframe* LoopLink::slot() {
   return slot;
 }
 
-void LoopLink::offer_keyframe(const Keyframe& kf, const KeyframeLink& link, const FramePyramid& f) {
+void LoopLink::offer_keyframe(const Keyframe& kf, const KeyframeLink& link,
+                              const KeyframeLink& window, const FramePyramid& f) {
   LoopKeyframe* s = slot();
   if (s == nullptr) return;
   s->kind = LoopKeyframe::Kind::kKeyframe;
@@ -34,6 +35,9 @@ void LoopLink::offer_keyframe(const Keyframe& kf, const KeyframeLink& link, cons
   s->T_w_k = kf.T_w_k;
   s->T_reference_keyframe = link.T_reference_keyframe;
   s->information = link.information;
+  s->window_id = window.reference_id;
+  s->T_window_keyframe = window.T_reference_keyframe;
+  s->window_information = window.kind == EdgeKind::kRestart ? Matrix6d::Zero() : window.information;
   std::memcpy(s->gray.data(), f.gray(0).data(), sizeof(float) * s->gray.size());
   std::memcpy(s->inverse_depth.data(), f.inverse_depth(0).data(),
               sizeof(float) * s->inverse_depth.size());

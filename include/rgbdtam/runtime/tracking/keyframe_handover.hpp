@@ -70,8 +70,9 @@ class KeyframeHandover {
   void count_frame_awaiting() { ++counters_.frames_awaiting_keyframe; }
   // The frame in frame_slot becomes a keyframe at T_w_k once its pose is out (order_pending);
   // false while another is being built. to_mapper: the mapper maps it (a restart is not).
+  // window: a second measurement of it, against an earlier keyframe (kind kRestart: none).
   bool ask(const SE3& T_w_k, const KeyframeLink& link, bool to_mapper, int frame_slot,
-           PoseEstimate* out);
+           PoseEstimate* out, const KeyframeLink& window = KeyframeLink());
   bool due() const { return pending_.due; }
   // The asking frame's pose, as tracking measured it: offered to the mapper with the keyframe.
   void set_due_pose(const PoseEstimate& pose) { pending_.pose = pose; }
@@ -82,6 +83,8 @@ class KeyframeHandover {
   // or it was stale). Its link and frame stay readable until release_adopted().
   Keyframe* adopt_built(uint32_t map_epoch);
   const KeyframeLink& adopted_link() const { return pending_.link; }
+  // The local window's measurement of the adopted keyframe (kind kRestart: none).
+  const KeyframeLink& adopted_window_link() const { return pending_.window; }
   const FramePyramid& adopted_frame() const { return building_->frame(); }
   // The adopted keyframe goes to the mapper (if it asked to be mapped); the builder is free.
   void release_adopted();
@@ -121,6 +124,7 @@ class KeyframeHandover {
     int frame_buffer = 0;  // the keyframe's frame stays in this slot until ordered
     SE3 T_w_k;
     KeyframeLink link;
+    KeyframeLink window;
     bool to_mapper = false;
     PoseEstimate pose;       // the frame's, offered to the mapper with the keyframe
     uint32_t map_epoch = 0;  // when ordered: the map moved since makes it stale
