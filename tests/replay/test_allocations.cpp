@@ -119,6 +119,23 @@ TEST(Allocations, NoneWithTheMapperAndLoopModuleSynchronousOrOnTheirOwnThreads) 
   }
 }
 
+// The local window (loop.window): the second tracking of each new keyframe, its edge and the
+// refinements it asks for, blended into the poses sent, in the memory fixed at init. On the
+// short clip every disagreement refines (limit 0), so that corrections are sent.
+TEST(Allocations, NoneWhileTheLocalWindowRefinesTheMap) {
+  ReplayJob job;
+  const long calls = count_allocations_after_init(
+      {"map.enabled=true", "loop.window=true", "loop.threaded=false",
+       "loop.min_window_correction=0", "loop.min_window_correction_angle=0"},
+      &job);
+  const TrackingCounters c = job.system().tracking().counters();
+  std::printf("%u window edges, %u corrections (%u blended), %ld allocations after init\n",
+              job.loop().counters().window_edges, c.loop_corrections, c.blended_corrections, calls);
+  EXPECT_GT(job.loop().counters().window_edges, 0u);
+  EXPECT_GT(c.blended_corrections, 0u);
+  EXPECT_EQ(calls, 0) << g_bytes.load() << " bytes allocated after init";
+}
+
 TEST(Allocations, NoneWhileRecoveringFromAKidnappedFrame) {
   // Frame 25 of the clip shows what frame 0 showed: its first estimate fails the health checks,
   // so the wider basin and the re-tracking against the last valid frame run, and must allocate
