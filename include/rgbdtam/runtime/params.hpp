@@ -63,8 +63,8 @@ struct LoopParams {
   // earlier keyframe that sees most of it, and that measurement refines the map when it
   // disagrees with it by more than these; the refined map is sent when some keyframe moved
   // further. Small: a correction within max_reported_jump is blended into the poses sent. Off:
-  // on dithered copies it helped two stress variants and cost four other sequences
-  // (docs/loop-closure.md, "The local window").
+  // on dithered copies it helped the three stress variants that drift most and cost four other
+  // sequences (docs/loop-closure.md, "The local window").
   bool window = false;
   double min_window_correction_m = 0.002;
   double min_window_correction_rad = 0.1 * M_PI / 180.0;
