@@ -13,7 +13,7 @@ bool within_motion_limits(const SE3& T_last_current, double dt_s, const HealthLi
 
 bool same_pose(const SE3& a, const SE3& b) {
   const SE3 d = a.inverse() * b;
-  return d.translation().norm() <= kSamePoseM && so3_log(d.quaternion()).norm() <= kSamePoseRad;
+  return within(d, kSamePoseM, kSamePoseRad);
 }
 
 double prediction_reach_m(double dt_s, const HealthLimits& limits) {

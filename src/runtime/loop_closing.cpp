@@ -199,9 +199,8 @@ void LoopModule::add_keyframe(const LoopKeyframe& keyframe) {
         const SE3 d =
             (store_->get(first_revisit->from)->T_w_k * first_revisit->T_from_to).inverse() *
             (record.T_w_k * a.T_a_b);
-        revisits_agree = revisits_agree &&
-                         d.translation().norm() <= params_.loop.max_reported_jump_m &&
-                         so3_log(d.quaternion()).norm() <= params_.loop.max_reported_jump_rad;
+        revisits_agree = revisits_agree && within(d, params_.loop.max_reported_jump_m,
+                                                  params_.loop.max_reported_jump_rad);
       }
     }
     ++m;
@@ -347,7 +346,7 @@ int LoopModule::choose_candidates(int query_slot, PlaceCandidate* out) {
                    pose_distance(T_q_w * store_->at_slot(slot).T_w_k)};
     if (r.hops < 2) continue;  // itself and its neighbours
     const SE3 d = T_q_w * store_->at_slot(slot).T_w_k;
-    if (d.translation().norm() > kNearM || so3_log(d.quaternion()).norm() > kNearRad) continue;
+    if (!within(d, kNearM, kNearRad)) continue;
     if (r.hops <= kCovisibleHops) {
       if (covisible.slot < 0 || r.distance < covisible.distance) covisible = r;
       continue;
@@ -393,9 +392,7 @@ int LoopModule::choose_candidates(int query_slot, PlaceCandidate* out) {
   return n;
 }
 
-bool LoopModule::MoveLimit::exceeded_by(const SE3& d) const {
-  return d.translation().norm() > m || so3_log(d.quaternion()).norm() > rad;
-}
+bool LoopModule::MoveLimit::exceeded_by(const SE3& d) const { return !within(d, m, rad); }
 
 LoopModule::MoveLimit LoopModule::correction_limit() const {
   return {params_.loop.min_correction_m, params_.loop.min_correction_rad};

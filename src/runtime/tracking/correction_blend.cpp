@@ -8,9 +8,8 @@ namespace rgbdtam {
 bool CorrectionBlend::absorb(const SE3& delta, const SE3& T_w_c, SE3* sent_jump) {
   const SE3 last_sent = T_sent_w_ * T_w_c;
   const SE3 jump = last_sent.inverse() * (delta * T_w_c);
-  const bool within = jump.translation().norm() <= limits_.max_m &&
-                      so3_log(jump.quaternion()).norm() <= limits_.max_rad;
-  if (limits_.rate_m_per_s > 0.0 && limits_.rate_rad_per_s > 0.0 && within) {
+  if (limits_.rate_m_per_s > 0.0 && limits_.rate_rad_per_s > 0.0 &&
+      within(jump, limits_.max_m, limits_.max_rad)) {
     T_sent_w_ = T_sent_w_ * delta.inverse();  // the pose sent does not move
     blending_ = true;
     return true;
