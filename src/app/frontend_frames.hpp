@@ -1,10 +1,11 @@
 #pragma once
 // The frames of a recorded TUM sequence as the tracker's frontend sees them (undistorted grey
-// and sensor inverse depth at full resolution), for offline commands and tools. Allocates at
-// open().
+// and sensor inverse depth at full resolution, registered to colour as the tracker takes it), for
+// offline commands and tools. Allocates at open().
 
 #include "rgbdtam/core/pyramid.hpp"
 #include "rgbdtam/hal/tum_replay_source.hpp"
+#include "rgbdtam/runtime/depth_in_colour.hpp"
 #include "rgbdtam/runtime/params.hpp"
 
 namespace rgbdtam {
@@ -20,6 +21,7 @@ class FrontendFrames {
 
  private:
   TumReplaySource source_;
+  DepthInColour depth_in_colour_;
   Undistorter undistorter_;
   FramePyramid frame_;
 };

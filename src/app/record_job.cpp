@@ -10,7 +10,7 @@ Status RecordJob::init(const RunOptions& options, const char* out_dir) {
   options_ = options;
   RGBDTAM_RETURN_IF_ERROR(load_board_and_params(options, &board_, &params_));
   RGBDTAM_RETURN_IF_ERROR(open_board_sensor(board_, params_, &sensor_));
-  return recorder_.open(out_dir, params_.camera.width_px, params_.camera.height_px);
+  return recorder_.open(out_dir, sensor_image_size(params_));
 }
 
 Status RecordJob::start() {

@@ -29,7 +29,7 @@ void reserve_touched(std::vector<T>* v, size_t n, const T& fill) {
 Status ReplayJob::init(const ReplayOptions& options) {
   options_ = options;
   const Params& p = options.params;
-  RGBDTAM_RETURN_IF_ERROR(source_.open(options.sequence, p.camera.width_px, p.camera.height_px,
+  RGBDTAM_RETURN_IF_ERROR(source_.open(options.sequence, sensor_image_size(p),
                                        p.sensor.max_rgb_depth_dt_ns,
                                        p.sensor.depth_time_offset_ns));
   if (source_.rgb_list().bad_lines > 0) {

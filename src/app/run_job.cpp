@@ -71,11 +71,10 @@ namespace {
 constexpr int kFrameTimeoutMs = 1000;
 
 Status open_replay(const Board& board, const Params& params, BoardSensor* sensor) {
-  const int w = params.camera.width_px, h = params.camera.height_px;
-  RGBDTAM_RETURN_IF_ERROR(sensor->replay.open(board.sensor_device, w, h,
+  RGBDTAM_RETURN_IF_ERROR(sensor->replay.open(board.sensor_device, sensor_image_size(params),
                                               params.sensor.max_rgb_depth_dt_ns,
                                               params.sensor.depth_time_offset_ns));
-  sensor->replay_sensor.open(&sensor->replay, w, h);
+  sensor->replay_sensor.open(&sensor->replay);
   sensor->live = &sensor->replay_sensor;
   return Status::ok();
 }
@@ -100,8 +99,8 @@ Status open_v4l2(const Board& board, const Params& params, BoardSensor* sensor, 
   }
   sensor->v4l2.use_camera_clock(board.sensor_clock_hz);
   RGBDTAM_RETURN_IF_ERROR(sensor->v4l2.open(
-      v4l2_io != nullptr ? v4l2_io : &sensor->v4l2_io, depth, colour, params.camera.width_px,
-      params.camera.height_px, params.sensor.max_rgb_depth_dt_ns, kFrameTimeoutMs,
+      v4l2_io != nullptr ? v4l2_io : &sensor->v4l2_io, depth, colour, sensor_image_size(params),
+      params.sensor.max_rgb_depth_dt_ns, kFrameTimeoutMs,
       std::strcmp(board.sensor_colour, "mjpeg") == 0 ? V4l2Colour::kMjpeg : V4l2Colour::kYuyv));
   sensor->live = &sensor->v4l2;
   return Status::ok();

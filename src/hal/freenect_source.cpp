@@ -169,8 +169,8 @@ Status FreenectSource::next(SensorFrame* frame, Status* warning) {
     frame->depth_timestamp_ns = frame->timestamp_ns;
     frame->gray = gray_.data();
     frame->depth = depth_.data();
-    frame->width_px = kWidth;
-    frame->height_px = kHeight;
+    frame->width_px = frame->depth_width_px = kWidth;
+    frame->height_px = frame->depth_height_px = kHeight;
     return Status::ok();
   }
   return Status::error(StatusCode::kIoError,

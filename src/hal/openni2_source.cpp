@@ -175,8 +175,8 @@ Status OpenNi2Source::next(SensorFrame* frame, Status* warning) {
         frame->depth_timestamp_ns = depth.stamp_ns;
         frame->gray = gray_[c].data();
         frame->depth = depth_[d].data();
-        frame->width_px = width_;
-        frame->height_px = height_;
+        frame->width_px = frame->depth_width_px = width_;
+        frame->height_px = frame->depth_height_px = height_;
         return Status::ok();
       }
     }

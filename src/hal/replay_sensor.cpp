@@ -7,11 +7,12 @@
 namespace rgbdtam {
 ReplaySensor::~ReplaySensor() { stop(); }
 
-void ReplaySensor::open(TumReplaySource* source, int width, int height) {
+void ReplaySensor::open(TumReplaySource* source) {
   source_ = source;
+  const SensorImageSize& size = source->size();
   for (Slot& s : slots_) {
-    s.gray.allocate(width, height);
-    s.depth.allocate(width, height);
+    s.gray.allocate(size.width_px, size.height_px);
+    s.depth.allocate(size.depth_width_px, size.depth_height_px);
   }
 }
 

@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -48,12 +49,11 @@ Status open_list(const char* dir, const char* name, const char* header, int* fd)
 
 TumRecorder::~TumRecorder() { (void)finish(); }
 
-Status TumRecorder::open(const char* out_dir, int width, int height) {
+Status TumRecorder::open(const char* out_dir, const SensorImageSize& size) {
   if (std::snprintf(dir_, sizeof(dir_), "%s", out_dir) >= static_cast<int>(sizeof(dir_))) {
     return Status::error(StatusCode::kInvalidArgument, "output folder path too long");
   }
-  width_ = width;
-  height_ = height;
+  size_ = size;
   char sub[450];
   RGBDTAM_RETURN_IF_ERROR(make_dir(dir_));
   std::snprintf(sub, sizeof(sub), "%s/rgb", dir_);
@@ -70,10 +70,11 @@ Status TumRecorder::open(const char* out_dir, int width, int height) {
                                     &depth_list_));
   queue_.allocate(kQueueSlots);
   for (int i = 0; i < kQueueSlots; ++i) {
-    queue_.slot(i).gray.allocate(width, height);
-    queue_.slot(i).depth.allocate(width, height);
+    queue_.slot(i).gray.allocate(size.width_px, size.height_px);
+    queue_.slot(i).depth.allocate(size.depth_width_px, size.depth_height_px);
   }
-  encoder_.allocate(width, height);
+  encoder_.allocate(std::max(size.width_px, size.depth_width_px),
+                    std::max(size.height_px, size.depth_height_px));
   return Status::ok();
 }
 
@@ -84,14 +85,17 @@ Status TumRecorder::start(const ThreadPlacement& placement) {
 
 bool TumRecorder::push(const SensorFrame& frame) {
   Slot* s = queue_.begin_push();
-  if (s == nullptr || frame.width_px != width_ || frame.height_px != height_) {
+  if (s == nullptr || frame.width_px != size_.width_px || frame.height_px != size_.height_px ||
+      frame.depth_width_px != size_.depth_width_px ||
+      frame.depth_height_px != size_.depth_height_px) {
     dropped_.fetch_add(1, std::memory_order_relaxed);
     return false;
   }
-  const size_t pixels = static_cast<size_t>(width_) * static_cast<size_t>(height_);
-  std::memcpy(s->gray.data(), frame.gray, pixels);
+  std::memcpy(s->gray.data(), frame.gray, size_.pixels());
   s->has_depth = frame.depth != nullptr;
-  if (s->has_depth) std::memcpy(s->depth.data(), frame.depth, pixels * sizeof(uint16_t));
+  if (s->has_depth) {
+    std::memcpy(s->depth.data(), frame.depth, size_.depth_pixels() * sizeof(uint16_t));
+  }
   s->timestamp_ns = frame.timestamp_ns;
   s->depth_timestamp_ns = frame.depth_timestamp_ns;
   queue_.publish();
@@ -130,12 +134,13 @@ Status TumRecorder::store_encoded(const char* folder, int64_t stamp_ns, int list
 }
 
 Status TumRecorder::write_frame(const Slot& s) {
-  RGBDTAM_RETURN_IF_ERROR(encoder_.encode_gray8(s.gray.data(), width_, height_));
+  RGBDTAM_RETURN_IF_ERROR(encoder_.encode_gray8(s.gray.data(), size_.width_px, size_.height_px));
   RGBDTAM_RETURN_IF_ERROR(store_encoded("rgb", s.timestamp_ns, rgb_list_));
   written_.fetch_add(1, std::memory_order_relaxed);
   if (!s.has_depth || s.depth_timestamp_ns == last_depth_ns_) return Status::ok();
   last_depth_ns_ = s.depth_timestamp_ns;
-  RGBDTAM_RETURN_IF_ERROR(encoder_.encode_gray16(s.depth.data(), width_, height_));
+  RGBDTAM_RETURN_IF_ERROR(
+      encoder_.encode_gray16(s.depth.data(), size_.depth_width_px, size_.depth_height_px));
   RGBDTAM_RETURN_IF_ERROR(store_encoded("depth", s.depth_timestamp_ns, depth_list_));
   depth_written_.fetch_add(1, std::memory_order_relaxed);
   return Status::ok();

@@ -99,14 +99,13 @@ Status parse_tum_list(const char* text, const char* source, TumList* out) {
   return Status::ok();
 }
 
-Status TumReplaySource::open(const char* folder, int width, int height, int64_t max_rgb_depth_dt_ns,
-                             int64_t depth_time_offset_ns) {
+Status TumReplaySource::open(const char* folder, const SensorImageSize& size,
+                             int64_t max_rgb_depth_dt_ns, int64_t depth_time_offset_ns) {
   if (std::strlen(folder) >= sizeof(folder_) - 200) {
     return Status::error(StatusCode::kInvalidArgument, "sequence path too long: %s", folder);
   }
   std::snprintf(folder_, sizeof(folder_), "%s", folder);
-  width_ = width;
-  height_ = height;
+  size_ = size;
   for (int which = 0; which < 2; ++which) {
     char path[768];
     std::snprintf(path, sizeof(path), "%s/%s", folder_, which == 0 ? "rgb.txt" : "depth.txt");
@@ -129,11 +128,11 @@ Status TumReplaySource::open(const char* folder, int width, int height, int64_t 
     depth_match_[i] = close ? j : -1;
   }
   // A PNG is at most its raw size plus zlib's and the chunks' overhead.
-  file_capacity_ = static_cast<size_t>(width) * height * 4 + (1u << 16);
+  file_capacity_ = std::max(size.pixels(), size.depth_pixels()) * 4 + (1u << 16);
   file_buf_.reset(new uint8_t[file_capacity_]);
-  png_.allocate(width);
-  gray_.allocate(width, height);
-  depth_img_.allocate(width, height);
+  png_.allocate(std::max(size.width_px, size.depth_width_px));
+  gray_.allocate(size.width_px, size.height_px);
+  depth_img_.allocate(size.depth_width_px, size.depth_height_px);
   cursor_ = 0;
   return Status::ok();
 }
@@ -143,10 +142,10 @@ Status TumReplaySource::load(const TumListEntry& e, bool depth, void* out) {
   std::snprintf(path, sizeof(path), "%s/%s", folder_, e.path);
   size_t size = 0;
   RGBDTAM_RETURN_IF_ERROR(read_file(path, file_buf_.get(), file_capacity_, &size));
-  const Status s =
-      depth
-          ? png_.decode_gray16(file_buf_.get(), size, width_, height_, static_cast<uint16_t*>(out))
-          : png_.decode_gray8(file_buf_.get(), size, width_, height_, static_cast<uint8_t*>(out));
+  const Status s = depth ? png_.decode_gray16(file_buf_.get(), size, size_.depth_width_px,
+                                              size_.depth_height_px, static_cast<uint16_t*>(out))
+                         : png_.decode_gray8(file_buf_.get(), size, size_.width_px, size_.height_px,
+                                             static_cast<uint8_t*>(out));
   if (!s.is_ok()) return Status::error(s.code(), "%s: %s", path, s.message());
   return Status::ok();
 }
@@ -169,8 +168,10 @@ Status TumReplaySource::next_into(ImageU8* gray, ImageU16* depth, SensorFrame* f
   frame->sequence = static_cast<uint32_t>(i);
   frame->timestamp_ns = rgb.timestamp_ns;
   frame->gray = gray->data();
-  frame->width_px = width_;
-  frame->height_px = height_;
+  frame->width_px = size_.width_px;
+  frame->height_px = size_.height_px;
+  frame->depth_width_px = size_.depth_width_px;
+  frame->depth_height_px = size_.depth_height_px;
   frame->depth = nullptr;
   frame->depth_timestamp_ns = 0;
   const int d = depth_match_[i];

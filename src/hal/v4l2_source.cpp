@@ -309,19 +309,21 @@ void V4l2MetadataReader::close() {
   next_ = 0;
 }
 
-Status V4l2Source::open(V4l2Io* io, const char* depth_path, const char* colour_path, int width,
-                        int height, int64_t max_pair_dt_ns, int timeout_ms, V4l2Colour colour) {
+Status V4l2Source::open(V4l2Io* io, const char* depth_path, const char* colour_path,
+                        const SensorImageSize& size, int64_t max_pair_dt_ns, int timeout_ms,
+                        V4l2Colour colour) {
   colour_format_ = colour;
-  if (colour == V4l2Colour::kMjpeg) RGBDTAM_RETURN_IF_ERROR(jpeg_.open(width, height));
-  width_ = width;
-  height_ = height;
+  if (colour == V4l2Colour::kMjpeg) {
+    RGBDTAM_RETURN_IF_ERROR(jpeg_.open(size.width_px, size.height_px));
+  }
+  size_ = size;
   max_pair_dt_ns_ = max_pair_dt_ns;
   timeout_ms_ = timeout_ms;
   io_ = io;
   std::snprintf(nodes_.depth, sizeof(nodes_.depth), "%s", depth_path);
   std::snprintf(nodes_.colour, sizeof(nodes_.colour), "%s", colour_path);
-  gray_.allocate(width, height);
-  depth_img_.allocate(width, height);
+  gray_.allocate(size.width_px, size.height_px);
+  depth_img_.allocate(size.depth_width_px, size.depth_height_px);
   return open_stream();
 }
 
@@ -338,8 +340,10 @@ Status V4l2Source::open_stream() {
   if (by_usb_) {
     RGBDTAM_RETURN_IF_ERROR(finder_.find(io_, sysfs_root_, devfs_root_, usb_, colour, &nodes_));
   }
-  RGBDTAM_RETURN_IF_ERROR(depth_.open(io_, nodes_.depth, V4L2_PIX_FMT_Z16, width_, height_));
-  RGBDTAM_RETURN_IF_ERROR(colour_.open(io_, nodes_.colour, colour, width_, height_));
+  RGBDTAM_RETURN_IF_ERROR(depth_.open(io_, nodes_.depth, V4L2_PIX_FMT_Z16, size_.depth_width_px,
+                                      size_.depth_height_px));
+  RGBDTAM_RETURN_IF_ERROR(
+      colour_.open(io_, nodes_.colour, colour, size_.width_px, size_.height_px));
   // Without both metadata nodes, frames are stamped on arrival as before.
   if (camera_clock_hz_ > 0.0 && nodes_.depth_metadata[0] != '\0' &&
       nodes_.colour_metadata[0] != '\0' &&
@@ -378,7 +382,7 @@ V4l2Source::Stamped V4l2Source::stamp(V4l2Stream* stream, V4l2MetadataReader* re
 
 Status V4l2Source::next(SensorFrame* frame, Status* warning) {
   *warning = Status::ok();
-  const size_t pixels = static_cast<size_t>(width_) * static_cast<size_t>(height_);
+  const size_t pixels = size_.pixels(), depth_pixels = size_.depth_pixels();
   int d = -1, c = -1;
   int64_t arrival_d = 0, arrival_c = 0;
   Stamped sd, sc;
@@ -414,13 +418,13 @@ Status V4l2Source::next(SensorFrame* frame, Status* warning) {
   }
   const bool mjpeg = colour_format_ == V4l2Colour::kMjpeg;
   if (s.is_ok() &&
-      (depth_.bytes_used(d) < pixels * 2 || (!mjpeg && colour_.bytes_used(c) < pixels * 2))) {
+      (depth_.bytes_used(d) < depth_pixels * 2 || (!mjpeg && colour_.bytes_used(c) < pixels * 2))) {
     s = Status::error(StatusCode::kCorrupt, "short frame (%zu depth, %zu colour bytes)",
                       depth_.bytes_used(d), colour_.bytes_used(c));
   }
   if (s.is_ok() && mjpeg) s = jpeg_.decode(colour_.data(c), colour_.bytes_used(c), gray_.data());
   if (s.is_ok()) {
-    std::memcpy(depth_img_.data(), depth_.data(d), pixels * 2);
+    std::memcpy(depth_img_.data(), depth_.data(d), depth_pixels * 2);
     if (!mjpeg) {
       const uint8_t* yuyv = colour_.data(c);
       uint8_t* gray = gray_.data();
@@ -453,8 +457,10 @@ Status V4l2Source::next(SensorFrame* frame, Status* warning) {
   counters_.pair_offset_sum_ns += offset;
   frame->gray = gray_.data();
   frame->depth = depth_img_.data();
-  frame->width_px = width_;
-  frame->height_px = height_;
+  frame->width_px = size_.width_px;
+  frame->height_px = size_.height_px;
+  frame->depth_width_px = size_.depth_width_px;
+  frame->depth_height_px = size_.depth_height_px;
   ++counters_.delivered;
   return Status::ok();
 }

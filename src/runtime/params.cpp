@@ -66,6 +66,12 @@ const KeySpec kSpecs[] = {
      RGBDTAM_FIELD(depth_camera.intrinsics.cx_px), false},
     {"depth_camera.cy", ValueType::kReal, -1e4, 1e4, "px", "depth camera principal point y",
      RGBDTAM_FIELD(depth_camera.intrinsics.cy_px), false},
+    {"depth_camera.width", ValueType::kInt, 0, 4096, "px",
+     "depth image width when it differs from colour's (0: colour's; needs depth_camera.register)",
+     RGBDTAM_FIELD(depth_camera.intrinsics.width_px), false},
+    {"depth_camera.height", ValueType::kInt, 0, 4096, "px",
+     "depth image height when it differs from colour's (0: colour's)",
+     RGBDTAM_FIELD(depth_camera.intrinsics.height_px), false},
     {"depth_camera.k1", ValueType::kReal, -10, 10, "", "depth camera radial distortion k1",
      RGBDTAM_FIELD(depth_camera.distortion.k1), false},
     {"depth_camera.k2", ValueType::kReal, -10, 10, "", "depth camera radial distortion k2",
@@ -289,6 +295,21 @@ Status check_consistency(const char* source, const Params& p) {
                          "%s: key 'depth.min' (%g) must be below 'depth.max' (%g)", source,
                          p.sensor.depth_range.min_m, p.sensor.depth_range.max_m);
   }
+  const PinholeIntrinsics& depth_size = p.depth_camera.intrinsics;
+  if ((depth_size.width_px > 0) != (depth_size.height_px > 0) ||
+      (depth_size.width_px > 0 && !p.depth_camera.register_to_colour)) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "%s: keys 'depth_camera.width'/'depth_camera.height' (%dx%d) give a depth "
+                         "image of its own size: both or neither, and only with "
+                         "'depth_camera.register = true' (registered depth is colour's size)",
+                         source, depth_size.width_px, depth_size.height_px);
+  }
+  if (depth_size.width_px > 0 && (depth_size.width_px < 8 || depth_size.height_px < 8)) {
+    return Status::error(StatusCode::kInvalidArgument,
+                         "%s: keys 'depth_camera.width'/'depth_camera.height' must be at least 8 "
+                         "px (got %dx%d)",
+                         source, depth_size.width_px, depth_size.height_px);
+  }
   if (p.depth_camera.register_to_colour) {
     const PinholeIntrinsics& k = p.depth_camera.intrinsics;
     if (k.fx_px <= 0 || k.fy_px <= 0) {
@@ -356,6 +377,16 @@ TrackerOptions tracking_options(const Params& p) {
   o.inverse_depth_sigma = p.sensor.inverse_depth_sigma();
   o.inverse_depth_sigma_floor = p.sensor.inverse_depth_quantum_sigma();
   return o;
+}
+
+SensorImageSize sensor_image_size(const Params& p) {
+  const PinholeIntrinsics& depth = p.depth_camera.intrinsics;
+  SensorImageSize size = same_size(p.camera.width_px, p.camera.height_px);
+  if (p.depth_camera.register_to_colour && depth.width_px > 0) {
+    size.depth_width_px = depth.width_px;
+    size.depth_height_px = depth.height_px;
+  }
+  return size;
 }
 
 double alias_range_m(const Params& p) { return p.health.max_speed_m_s * kMaxVelocityGapS; }

@@ -87,6 +87,8 @@ uint32_t TrackingPipeline::prepare(const SensorFrame& frame, PoseEstimate* out) 
   RGBDTAM_ASSERT(
       frame.width_px == params_.camera.width_px && frame.height_px == params_.camera.height_px,
       "sensor frame size differs from the configured camera");
+  RGBDTAM_ASSERT(frame.depth_width_px == frame.width_px && frame.depth_height_px == frame.height_px,
+                 "depth not in the colour camera: registration (DepthInColour) skipped");
   FramePyramid& pyramid = frames_.current();
   undistorter_.undistort_gray(frame.gray, &pyramid.gray(0));
   pyramid.build_gray();

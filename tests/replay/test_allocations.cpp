@@ -280,10 +280,10 @@ TEST(Allocations, NoneWhileAV4l2SensorDeliversSkipsAndTimesOut) {
   }
   io.now_ns = 900 * testing::kMs;
   V4l2Source source;
-  ASSERT_TRUE(
-      source
-          .open(&io, "/dev/video0", "/dev/video1", testing::kW, testing::kH, 10 * testing::kMs, 500)
-          .is_ok());
+  ASSERT_TRUE(source
+                  .open(&io, "/dev/video0", "/dev/video1", same_size(testing::kW, testing::kH),
+                        10 * testing::kMs, 500)
+                  .is_ok());
   SensorRecovery recovery;
   RecoveryConfig config;
   config.stall_ns = 5'000'000'000;  // a reopen maps buffers anew: not part of streaming
@@ -341,7 +341,8 @@ TEST(Allocations, NoneWhileReadingTheCamerasClockFromItsMetadataNodes) {
   V4l2Source source;
   source.locate_by_usb({0x8086, 0x0b07}, sysfs.c_str(), devfs.c_str());
   source.use_camera_clock(1e6);
-  ASSERT_TRUE(source.open(&io, "", "", testing::kW, testing::kH, 10 * testing::kMs, 500).is_ok());
+  ASSERT_TRUE(source.open(&io, "", "", same_size(testing::kW, testing::kH), 10 * testing::kMs, 500)
+                  .is_ok());
   ASSERT_TRUE(source.reads_metadata());
   g_calls = 0;
   g_bytes = 0;
@@ -372,8 +373,8 @@ TEST(Allocations, NoneWhileDecodingMjpegColourFrames) {
   camera.send_mjpeg(jpeg);
   V4l2Source source;
   ASSERT_TRUE(source
-                  .open(&camera, "/dev/soak-depth", "/dev/soak-colour", 640, 480, 20'000'000, 1000,
-                        V4l2Colour::kMjpeg)
+                  .open(&camera, "/dev/soak-depth", "/dev/soak-colour", same_size(640, 480),
+                        20'000'000, 1000, V4l2Colour::kMjpeg)
                   .is_ok());
   SensorFrame f;
   Status warning;

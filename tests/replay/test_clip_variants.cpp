@@ -2,6 +2,11 @@
 // with noise for its images, and wandered over. Whatever cannot be tracked is reported lost.
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <sstream>
+
+#include "config_text.hpp"
+
 #include "replay_runner.hpp"
 #include "stress_variants.hpp"
 #include "test_paths.hpp"
@@ -28,6 +33,36 @@ TEST(ClipVariants, TheRealClipWithAKidnappedFrameIsNeverFalseValid) {
       testing::replay_and_evaluate(dir + "/kidnapped", testing::source_path("config/tum_fr1.conf"));
   EXPECT_GE(out.counters.lost, 1u) << "the kidnapped frame";
   testing::expect_tracked_or_lost(out, "clip with a kidnapped frame", 0.9);
+}
+
+TEST(ClipVariants, DepthFromACameraOfItsOwnSizeIsRegisteredAndTrackedAsTheRegisteredClip) {
+  // As a D435 over V4L2 delivers it: depth 848x480 over an 87-degree field, 2.5 cm aside.
+  const std::string dir = testing::make_temp_dir("clip_depth_camera");
+  const std::string clip = testing::source_path("data/tum_fr1_xyz_clip");
+  const std::string config = testing::source_path("config/tum_fr1.conf");
+  testing::DepthCameraShape d435;
+  d435.focal_scale = 0.85;
+  d435.width_px = 848;
+  d435.height_px = 480;
+  ASSERT_TRUE(testing::unregister_depth(clip, dir + "/d435", config, d435));
+  // The shipped config with the keys the tool wrote (its vocabulary found where it lies).
+  const std::string combined = dir + "/d435.conf";
+  {
+    std::ifstream base(config), keys(dir + "/d435/depth_camera.conf");
+    std::stringstream base_text, key_text;
+    base_text << base.rdbuf();
+    key_text << keys.rdbuf();
+    std::ofstream(combined) << testing::with_changes(
+        base_text.str(), key_text.str() + "loop.vocabulary = " +
+                             testing::source_path("data/vocabulary/tum-k10-l4.voc") + "\n");
+  }
+  const auto registered = testing::replay_and_evaluate(clip, config);
+  const auto moved = testing::replay_and_evaluate(dir + "/d435", combined);
+  ASSERT_TRUE(moved.ran) << moved.status.message();
+  testing::expect_tracked_or_lost(moved, "clip, depth 848x480 registered in software", 1.0);
+  std::printf("ATE %.2f cm registered by the sensor, %.2f cm from 848x480 in software\n",
+              registered.report.ate.rmse_m * 100, moved.report.ate.rmse_m * 100);
+  EXPECT_LT(moved.report.ate.rmse_m, registered.report.ate.rmse_m + 0.001) << "within 0.1 cm";
 }
 
 TEST(ClipVariants, NoiseInGivesNoPoseOut) {

@@ -265,7 +265,7 @@ TEST(Freenect, TrackingThroughTheBackendEqualsTheTumReplayOfTheSameFrames) {
   std::unique_ptr<FreenectSource> kinect(open_dump(dump));
   const std::vector<SE3> through_freenect = track_all(kinect.get(), params, kFrames);
   TumReplaySource replay;
-  ASSERT_TRUE(replay.open(tum.c_str(), kW, kH, 20'000'000, 0).is_ok());
+  ASSERT_TRUE(replay.open(tum.c_str(), same_size(kW, kH), 20'000'000, 0).is_ok());
   const std::vector<SE3> through_replay = track_all(&replay, params, kFrames);
   ASSERT_EQ(through_freenect.size(), static_cast<size_t>(kFrames));
   ASSERT_EQ(through_replay.size(), static_cast<size_t>(kFrames));
@@ -325,7 +325,7 @@ TEST(Freenect, TheFirmwareOnAKinectDumpStreamsThePosesOfTheTumReplayOfItsFrames)
   // The board's own profile (the Pi 4's small-board tracking) on both sides.
   ASSERT_TRUE(apply_board_capacity(job.board(), &params).is_ok());
   TumReplaySource replay;
-  ASSERT_TRUE(replay.open(tum.c_str(), kW, kH, 20'000'000, 0).is_ok());
+  ASSERT_TRUE(replay.open(tum.c_str(), same_size(kW, kH), 20'000'000, 0).is_ok());
   const std::vector<SE3> through_replay = track_all(&replay, params, kFrames);
   ASSERT_EQ(static_cast<int>(monitor.poses.size()), kFrames) << "every frame tracked";
   double worst = 0;
@@ -385,7 +385,7 @@ TEST(Freenect, RecordingAKinectThroughFakenectGivesItsFrames) {
   ASSERT_TRUE(job.finish().is_ok());
   EXPECT_EQ(job.recorder().counters().written, 4u);
   TumReplaySource replay;
-  ASSERT_TRUE(replay.open(out.c_str(), kW, kH, 20'000'000, 0).is_ok());
+  ASSERT_TRUE(replay.open(out.c_str(), same_size(kW, kH), 20'000'000, 0).is_ok());
   for (int f = 0; f < 4; ++f) {
     SensorFrame r;
     Status warning;

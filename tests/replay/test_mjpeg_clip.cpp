@@ -64,8 +64,8 @@ std::vector<StampedPose> track_camera(bool mjpeg, int* frames_delivered) {
   camera.drive_by_reader();  // both runs see the same frames, however slow the machine
   V4l2Source source;
   const Status opened =
-      source.open(&camera, "/dev/soak-depth", "/dev/soak-colour", kW, kH, 20'000'000, 1000,
-                  mjpeg ? V4l2Colour::kMjpeg : V4l2Colour::kYuyv);
+      source.open(&camera, "/dev/soak-depth", "/dev/soak-colour", same_size(kW, kH), 20'000'000,
+                  1000, mjpeg ? V4l2Colour::kMjpeg : V4l2Colour::kYuyv);
   EXPECT_TRUE(opened.is_ok()) << opened.message();
   const Params params = clip_params();
   KeyframePool keyframes;

@@ -4,6 +4,7 @@
 #include <sys/resource.h>
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <csignal>
 #include <fstream>
 
@@ -48,7 +49,8 @@ struct Frame {
 
 std::vector<Frame> read_all(const std::string& folder) {
   TumReplaySource src;
-  EXPECT_TRUE(src.open(folder.c_str(), 640, 480, 20'000'000, 20'000'000).is_ok()) << folder;
+  EXPECT_TRUE(src.open(folder.c_str(), same_size(640, 480), 20'000'000, 20'000'000).is_ok())
+      << folder;
   std::vector<Frame> out;
   SensorFrame f;
   Status warning;
@@ -97,17 +99,68 @@ TEST(Recorder, RecordingAReplayedSensorGivesTheSameFrames) {
   }
 }
 
+TEST(Recorder, ADepthCameraOfItsOwnSizeIsRecordedAtItAndReadBackOnlyAtIt) {
+  // A D435 over V4L2 delivers depth as its depth camera sees it (848x480 beside 640x480): here
+  // 80x40 beside 64x48.
+  const SensorImageSize size{64, 48, 80, 40};
+  const std::string out = testing::make_temp_dir("recorder_sizes") + "/recording";
+  std::vector<uint8_t> gray(size.pixels());
+  std::vector<uint16_t> depth(size.depth_pixels());
+  for (size_t i = 0; i < gray.size(); ++i) gray[i] = static_cast<uint8_t>(i);
+  for (size_t i = 0; i < depth.size(); ++i) depth[i] = static_cast<uint16_t>(1000 + i);
+  TumRecorder recorder;
+  ASSERT_TRUE(recorder.open(out.c_str(), size).is_ok());
+  ASSERT_TRUE(recorder.start(ThreadPlacement{}).is_ok());
+  SensorFrame f;
+  f.timestamp_ns = 1'000'000'000;
+  f.depth_timestamp_ns = 1'005'000'000;
+  f.gray = gray.data();
+  f.depth = depth.data();
+  f.width_px = size.width_px;
+  f.height_px = size.height_px;
+  f.depth_width_px = size.depth_width_px;
+  f.depth_height_px = size.depth_height_px;
+  EXPECT_TRUE(recorder.push(f));
+  SensorFrame registered = f;  // depth at colour's size: not what the recording was opened for
+  registered.timestamp_ns += 33'000'000;
+  registered.depth_width_px = size.width_px;
+  registered.depth_height_px = size.height_px;
+  EXPECT_FALSE(recorder.push(registered));
+  ASSERT_TRUE(recorder.finish().is_ok());
+  EXPECT_EQ(recorder.counters().written, 1u);
+  EXPECT_EQ(recorder.counters().dropped, 1u);
+
+  TumReplaySource replay;
+  ASSERT_TRUE(replay.open(out.c_str(), size, 20'000'000, 0).is_ok());
+  SensorFrame back;
+  Status warning;
+  ASSERT_TRUE(replay.next(&back, &warning).is_ok());
+  ASSERT_NE(back.depth, nullptr) << warning.message();
+  EXPECT_EQ(back.depth_width_px, size.depth_width_px);
+  EXPECT_EQ(back.depth_height_px, size.depth_height_px);
+  EXPECT_TRUE(std::equal(depth.begin(), depth.end(), back.depth));
+  EXPECT_TRUE(std::equal(gray.begin(), gray.end(), back.gray));
+  // Replayed with a config that forgot the depth camera's size: the frame comes without depth,
+  // and the warning says why.
+  TumReplaySource forgot;
+  ASSERT_TRUE(forgot.open(out.c_str(), same_size(64, 48), 20'000'000, 0).is_ok());
+  ASSERT_TRUE(forgot.next(&back, &warning).is_ok());
+  EXPECT_EQ(back.depth, nullptr);
+  EXPECT_NE(std::string(warning.message()).find("PNG is 80x40, expected 64x48"), std::string::npos)
+      << warning.message();
+}
+
 TEST(Recorder, RefusesToOverwriteARecordingAndNamesBadFolders) {
   const std::string out = testing::make_temp_dir("recorder_twice");
   TumRecorder first;
-  ASSERT_TRUE(first.open(out.c_str(), 64, 48).is_ok());
+  ASSERT_TRUE(first.open(out.c_str(), same_size(64, 48)).is_ok());
   ASSERT_TRUE(first.finish().is_ok());
   TumRecorder second;
-  const Status again = second.open(out.c_str(), 64, 48);
+  const Status again = second.open(out.c_str(), same_size(64, 48));
   ASSERT_FALSE(again.is_ok());
   EXPECT_NE(std::string(again.message()).find("holds a recording already"), std::string::npos);
   TumRecorder bad;
-  const Status s = bad.open("/proc/rgbdtam-cannot-write-here", 64, 48);
+  const Status s = bad.open("/proc/rgbdtam-cannot-write-here", same_size(64, 48));
   ASSERT_FALSE(s.is_ok());
   EXPECT_NE(std::string(s.message()).find("/proc/rgbdtam-cannot-write-here"), std::string::npos);
 }

@@ -63,6 +63,7 @@ class FakeV4l2 : public V4l2Io {
     bool qbuf_broken = false;                  // every VIDIOC_QBUF fails until opened again
     uint32_t meta_format = V4L2_META_FMT_UVC;  // a metadata node's format (UVCH or D4XX)
     uint32_t frames = 0;                       // frames delivered (their sequence numbers)
+    int width = kW, height = kH;               // the one size it streams at
   };
   static constexpr size_t kMjpegBufferBytes = 1 << 16;
   std::vector<Node> nodes;
@@ -72,13 +73,29 @@ class FakeV4l2 : public V4l2Io {
   int64_t now_ns = 0;
 
   Node& add(const std::string& path, uint32_t fourcc) {
-    nodes.push_back(
-        {path, fourcc, {}, {}, {}, false, false, 0, {}, {}, false, 0, false, V4L2_META_FMT_UVC, 0});
+    nodes.push_back({path,
+                     fourcc,
+                     {},
+                     {},
+                     {},
+                     false,
+                     false,
+                     0,
+                     {},
+                     {},
+                     false,
+                     0,
+                     false,
+                     V4L2_META_FMT_UVC,
+                     0,
+                     kW,
+                     kH});
     return nodes.back();
   }
   static size_t buffer_bytes(const Node& n) {
     if (n.metadata) return kMetadataBufferBytes;
-    return n.fourcc == V4L2_PIX_FMT_MJPEG ? kMjpegBufferBytes : kW * kH * 2;
+    return n.fourcc == V4L2_PIX_FMT_MJPEG ? kMjpegBufferBytes
+                                          : static_cast<size_t>(n.width * n.height * 2);
   }
   static constexpr size_t kMetadataBufferBytes = 1024;
   Node* node(int fd) {
@@ -132,8 +149,8 @@ class FakeV4l2 : public V4l2Io {
           return 0;
         }
         f->fmt.pix.pixelformat = n->fourcc;  // the nearest it has
-        f->fmt.pix.width = kW;
-        f->fmt.pix.height = kH;
+        f->fmt.pix.width = static_cast<uint32_t>(n->width);
+        f->fmt.pix.height = static_cast<uint32_t>(n->height);
         return 0;
       }
       case VIDIOC_REQBUFS: {
@@ -176,7 +193,8 @@ class FakeV4l2 : public V4l2Io {
         b->index = static_cast<uint32_t>(n->queued.front());
         n->queued.pop_front();
         std::vector<uint8_t>& mem = n->buffers[b->index];
-        b->bytesused = kW * kH * 2;
+        const int pixels = n->width * n->height;
+        b->bytesused = static_cast<uint32_t>(pixels * 2);
         b->sequence = e.sequence >= 0 ? static_cast<uint32_t>(e.sequence) : n->frames;
         ++n->frames;
         if (n->metadata) {
@@ -186,12 +204,12 @@ class FakeV4l2 : public V4l2Io {
           std::memcpy(mem.data(), jpeg.data(), jpeg.size());
           b->bytesused = static_cast<uint32_t>(jpeg.size());
         } else if (n->fourcc == V4L2_PIX_FMT_Z16) {
-          for (int i = 0; i < kW * kH; ++i) {
+          for (int i = 0; i < pixels; ++i) {
             const uint16_t v = static_cast<uint16_t>(e.fill * 100 + i);
             std::memcpy(&mem[2 * i], &v, 2);
           }
         } else {
-          for (int i = 0; i < kW * kH; ++i) {
+          for (int i = 0; i < pixels; ++i) {
             mem[2 * i] = static_cast<uint8_t>(e.fill + i % 2);  // Y
             mem[2 * i + 1] = 128;                               // U or V
           }

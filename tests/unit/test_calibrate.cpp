@@ -164,6 +164,8 @@ TEST(Calibration, RenderedViewsGiveBackBothCamerasAndTheirPoseWithinHalfAPercent
   ASSERT_TRUE(s.is_ok()) << s.message() << "\n" << keys;
   EXPECT_TRUE(p.depth_camera.register_to_colour);
   EXPECT_NEAR(p.depth_camera.intrinsics.fx_px, 385.1, 0.005 * 385.1);
+  EXPECT_EQ(sensor_image_size(p).depth_width_px, 640) << "the infrared image's size";
+  EXPECT_EQ(sensor_image_size(p).depth_height_px, 480);
   EXPECT_NEAR(p.depth_camera.T_c_d.translation().x(), 0.0150, 0.001);
   EXPECT_NEAR(p.distortion.k1, 0.08, 0.01);
 }

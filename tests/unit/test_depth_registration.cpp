@@ -155,6 +155,40 @@ TEST_F(Registration, DepthFromItsOwnCameraLandsWhereTheColourCameraSeesIt) {
   EXPECT_LT(c.wrong_surface, 26);
 }
 
+// A D4xx's depth camera has an image of its own size and a wider field than colour's (87 against
+// 69 degrees): a wider, larger image, and a coarser one whose pixels each cover about two of
+// colour's, both land as the colour camera sees the scene, without cracks.
+TEST_F(Registration, ADepthImageOfAnotherSizeLandsInTheColourCamera) {
+  struct Shape {
+    const char* name;
+    PinholeIntrinsics intrinsics;
+  };
+  const Shape shapes[] = {
+      {"424x240, 88 degrees wide", {220.0, 220.0, 213.5, 118.0, 424, 240}},
+      {"160x120, half colour's focal length", {131.0, 131.0, 80.5, 58.5, 160, 120}}};
+  const std::vector<uint16_t> exact = render(colour_, SE3());
+  for (const Shape& shape : shapes) {
+    CameraModel depth_camera = depth_camera_;
+    depth_camera.intrinsics = shape.intrinsics;
+    const std::vector<uint16_t> measured = render(depth_camera, T_c_d_);
+    DepthRegistration registration;
+    registration.init(depth_camera, colour_, T_c_d_, kFactor);
+    std::vector<uint16_t> registered(exact.size(), 1);
+    registration.apply(measured.data(), registered.data());
+    const Comparison c = compare(
+        registered, exact, seen_by_depth_camera(exact, colour_, measured, depth_camera, T_c_d_));
+    const double median = percentile(c.errors_m, 0.5), p95 = percentile(c.errors_m, 0.95);
+    std::printf(
+        "%s: %d of the %d pixels both see filled, error median %.2f mm, p95 %.2f mm, %d "
+        "on the wrong surface\n",
+        shape.name, c.filled, c.seen, median * 1e3, p95 * 1e3, c.wrong_surface);
+    EXPECT_LT(median, 0.0005) << shape.name;
+    EXPECT_LT(p95, 0.002) << shape.name;
+    EXPECT_GT(c.filled, c.seen * 999 / 1000) << shape.name;
+    EXPECT_LT(c.wrong_surface, 52) << shape.name;
+  }
+}
+
 // A wall receding steeply to the side (70 degrees from facing the cameras), 5 cm of baseline:
 // the depth camera sees it 13 % wider than the colour camera does. With squares of their facing
 // size, 12 % of the wall's pixels were cracks, in runs of 5-6 every 50 pixels where the

@@ -116,6 +116,33 @@ TEST(Params, ADepthCameraOfItsOwnIsReadAndAnIncompleteOneRefused) {
                "'depth_camera.T_c_d'");
 }
 
+TEST(Params, TheDepthImageIsColoursSizeUnlessItsCameraGivesItsOwn) {
+  const std::string depth_camera =
+      "depth_camera.fx = 420\ndepth_camera.fy = 421\ndepth_camera.cx = 318\n"
+      "depth_camera.cy = 241\ndepth_camera.T_c_d = 1 0 0 0 -0.015 0 0\n"
+      "depth_camera.register = true\n";
+  Params p;
+  ASSERT_TRUE(parse(testing::with_changes(kMinimal, depth_camera), &p).is_ok());
+  SensorImageSize size = sensor_image_size(p);
+  EXPECT_EQ(size.depth_width_px, p.camera.width_px);
+  EXPECT_EQ(size.depth_height_px, p.camera.height_px);
+  ASSERT_TRUE(parse(testing::with_changes(kMinimal, depth_camera + "depth_camera.width = 848\n"
+                                                                   "depth_camera.height = 480\n"),
+                    &p)
+                  .is_ok());
+  size = sensor_image_size(p);
+  EXPECT_EQ(size.width_px, p.camera.width_px);
+  EXPECT_EQ(size.depth_width_px, 848);
+  EXPECT_EQ(size.depth_height_px, 480);
+  expect_error(testing::with_changes(kMinimal, depth_camera + "depth_camera.width = 848\n"),
+               "both or neither");
+  // Depth the device registers is colour's size.
+  expect_error(testing::with_changes(kMinimal,
+                                     "depth_camera.width = 848\ndepth_camera.height = "
+                                     "480\n"),
+               "only with 'depth_camera.register = true'");
+}
+
 TEST(Params, HealthLimitsAreReadInTheirUnits) {
   Params p;
   ASSERT_TRUE(

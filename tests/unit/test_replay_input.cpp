@@ -127,7 +127,7 @@ class BrokenSequence : public ::testing::Test {
   }
   std::vector<std::string> deliver_all(int* skipped, int* without_depth) {
     TumReplaySource src;
-    EXPECT_TRUE(src.open(dir_.c_str(), kWidth, kHeight, 20'000'000, 0).is_ok());
+    EXPECT_TRUE(src.open(dir_.c_str(), same_size(kWidth, kHeight), 20'000'000, 0).is_ok());
     std::vector<std::string> problems;
     *skipped = *without_depth = 0;
     for (;;) {
@@ -188,7 +188,7 @@ TEST_F(BrokenSequence, TruncatedListFileKeepsTheGoodLines) {
   text.resize(text.size() - rgb_.back().size() - 1);
   ASSERT_TRUE(testing::write_text(dir_ + "/rgb.txt", text));
   TumReplaySource src;
-  ASSERT_TRUE(src.open(dir_.c_str(), kWidth, kHeight, 20'000'000, 0).is_ok());
+  ASSERT_TRUE(src.open(dir_.c_str(), same_size(kWidth, kHeight), 20'000'000, 0).is_ok());
   EXPECT_EQ(src.frame_count(), kFrames - 1);
   EXPECT_EQ(src.rgb_list().bad_lines, 1);
 }
@@ -238,10 +238,12 @@ TEST(ReplaySensor, HeldEveryFrameReachesASlowTrackerInOrder) {
   constexpr int kFrames = 8;
   ASSERT_TRUE(testing::write_synthetic_sequence(dir, scene, kFrames, 1000.0));
   TumReplaySource source;
-  ASSERT_TRUE(source.open(dir.c_str(), scene.camera.width_px, scene.camera.height_px, 20'000'000, 0)
+  ASSERT_TRUE(source
+                  .open(dir.c_str(), same_size(scene.camera.width_px, scene.camera.height_px),
+                        20'000'000, 0)
                   .is_ok());
   ReplaySensor sensor;
-  sensor.open(&source, scene.camera.width_px, scene.camera.height_px);
+  sensor.open(&source);
   sensor.hold_every_frame();
   ASSERT_TRUE(sensor.start(ThreadPlacement{}).is_ok());
   std::vector<int64_t> stamps;
@@ -262,7 +264,7 @@ TEST(ReplaySensor, HeldEveryFrameReachesASlowTrackerInOrder) {
 
 TEST(ReplaySource, MissingFolderIsAClearError) {
   TumReplaySource src;
-  const Status s = src.open("/nonexistent/sequence", 640, 480, 20'000'000, 0);
+  const Status s = src.open("/nonexistent/sequence", same_size(640, 480), 20'000'000, 0);
   ASSERT_FALSE(s.is_ok());
   EXPECT_NE(std::string(s.message()).find("/nonexistent/sequence/rgb.txt"), std::string::npos);
 }
@@ -272,7 +274,7 @@ TEST(ReplaySource, AFifoInPlaceOfAFileIsRefusedNotWaitedOn) {
   const std::string dir = testing::make_temp_dir("fifo");
   ASSERT_EQ(::mkfifo((dir + "/rgb.txt").c_str(), 0644), 0);
   TumReplaySource src;
-  const Status s = src.open(dir.c_str(), 640, 480, 20'000'000, 0);
+  const Status s = src.open(dir.c_str(), same_size(640, 480), 20'000'000, 0);
   ASSERT_FALSE(s.is_ok());
   EXPECT_NE(std::string(s.message()).find("rgb.txt: not a regular file"), std::string::npos)
       << s.message();

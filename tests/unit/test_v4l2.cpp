@@ -42,7 +42,8 @@ struct Rig {
     io.now_ns = 900 * kMs;  // the scripts start about a second in
   }
   Status open() {
-    return source.open(&io, "/dev/video0", "/dev/video1", kW, kH, 10 * kMs, 500, colour_format);
+    return source.open(&io, "/dev/video0", "/dev/video1", same_size(kW, kH), 10 * kMs, 500,
+                       colour_format);
   }
 };
 
@@ -218,6 +219,35 @@ TEST(V4l2, ARefusedFormatIsAClearError) {
   EXPECT_NE(m.find("offers YUYV"), std::string::npos) << m;
 }
 
+TEST(V4l2, ADepthCameraOfItsOwnSizeIsStreamedAtItAndAnotherSizeNamesWhatItOffers) {
+  // A D435's depth node streams 848x480 beside colour's 640x480: here 24x12 beside 16x8.
+  constexpr int kDepthW = 24, kDepthH = 12;
+  Rig as_colour, rig;
+  for (Rig* r : {&as_colour, &rig}) {
+    r->depth->width = kDepthW;
+    r->depth->height = kDepthH;
+  }
+  const Status same = as_colour.open();  // depth asked for at colour's size
+  ASSERT_FALSE(same.is_ok());
+  EXPECT_NE(std::string(same.message()).find("offers Z16  24x12"), std::string::npos)
+      << same.message();
+  ASSERT_TRUE(
+      rig.source
+          .open(&rig.io, "/dev/video0", "/dev/video1", {kW, kH, kDepthW, kDepthH}, 10 * kMs, 500)
+          .is_ok());
+  rig.depth->script.push_back(frame(1000, 3));
+  rig.colour->script.push_back(frame(1001, 50));
+  SensorFrame f;
+  Status warning;
+  ASSERT_TRUE(rig.source.next(&f, &warning).is_ok());
+  EXPECT_EQ(f.width_px, kW);
+  EXPECT_EQ(f.height_px, kH);
+  EXPECT_EQ(f.depth_width_px, kDepthW);
+  EXPECT_EQ(f.depth_height_px, kDepthH);
+  EXPECT_EQ(f.depth[kDepthW * kDepthH - 1], 3 * 100 + kDepthW * kDepthH - 1) << "every row copied";
+  EXPECT_EQ(f.gray[kW * kH - 1], 51);
+}
+
 TEST(V4l2, AnUnpluggedDeviceEndsInAnErrorNotAHang) {
   Rig rig;
   ASSERT_TRUE(rig.open().is_ok());
@@ -244,7 +274,7 @@ TEST(V4l2, NoFramesIsATimeoutAndAMissingNodeIsNamed) {
   EXPECT_NE(std::string(s.message()).find("no frame for 500 ms"), std::string::npos);
   FakeV4l2 io;
   V4l2Source missing;
-  const Status m = missing.open(&io, "/dev/video7", "/dev/video8", kW, kH, 10 * kMs, 50);
+  const Status m = missing.open(&io, "/dev/video7", "/dev/video8", same_size(kW, kH), 10 * kMs, 50);
   ASSERT_FALSE(m.is_ok());
   EXPECT_NE(std::string(m.message()).find("/dev/video7"), std::string::npos);
 }
@@ -300,7 +330,7 @@ TEST(V4l2Nodes, AD435sDepthAndColourAreFoundByUsbIdAndWhatTheyOfferNotByNumber) 
   // Frames flow from the nodes found.
   V4l2Source source;
   source.locate_by_usb({0x8086, 0x0b07}, rig.sysfs.c_str(), rig.devfs.c_str());
-  ASSERT_TRUE(source.open(&rig.io, "", "", kW, kH, 10 * kMs, 500).is_ok());
+  ASSERT_TRUE(source.open(&rig.io, "", "", same_size(kW, kH), 10 * kMs, 500).is_ok());
   rig.depth->script = {frame(1000, 1)};
   rig.colour->script = {frame(1003, 2)};
   SensorFrame f;
@@ -331,7 +361,7 @@ TEST(V4l2Nodes, AResetThatRenumbersTheNodesIsFollowedAtTheReopen) {
   D435Rig rig;
   V4l2Source source;
   source.locate_by_usb({0x8086, 0x0b07}, rig.sysfs.c_str(), rig.devfs.c_str());
-  ASSERT_TRUE(source.open(&rig.io, "", "", kW, kH, 10 * kMs, 500).is_ok());
+  ASSERT_TRUE(source.open(&rig.io, "", "", same_size(kW, kH), 10 * kMs, 500).is_ok());
   EXPECT_EQ(std::string(source.nodes().depth), rig.devfs + "/video2");
   source.close();
   // Re-enumerated after a reset: the camera's nodes now start at video8.
@@ -345,7 +375,7 @@ TEST(V4l2Nodes, AResetThatRenumbersTheNodesIsFollowedAtTheReopen) {
   }
   V4l2Source again;
   again.locate_by_usb({0x8086, 0x0b07}, renumbered.c_str(), rig.devfs.c_str());
-  ASSERT_TRUE(again.open(&rig.io, "", "", kW, kH, 10 * kMs, 500).is_ok());
+  ASSERT_TRUE(again.open(&rig.io, "", "", same_size(kW, kH), 10 * kMs, 500).is_ok());
   EXPECT_EQ(std::string(again.nodes().depth), rig.devfs + "/video8");
   EXPECT_EQ(std::string(again.nodes().colour), rig.devfs + "/video12");
 }
@@ -391,7 +421,7 @@ TEST(V4l2Nodes, TheMetadataNodesStampAndPairFramesOnTheCamerasClock) {
   V4l2Source source;
   source.locate_by_usb({0x8086, 0x0b07}, rig.sysfs.c_str(), rig.devfs.c_str());
   source.use_camera_clock(1e6);
-  ASSERT_TRUE(source.open(&rig.io, "", "", kW, kH, 6 * kMs, 500).is_ok());
+  ASSERT_TRUE(source.open(&rig.io, "", "", same_size(kW, kH), 6 * kMs, 500).is_ok());
   ASSERT_TRUE(source.reads_metadata());
   script.play(&rig);
   for (int k = 0; k < CameraClockScript::kFrames; ++k) {
@@ -423,7 +453,7 @@ TEST(V4l2Nodes, TheMetadataNodesStampAndPairFramesOnTheCamerasClock) {
   D435Rig by_arrival;
   V4l2Source plain;
   plain.locate_by_usb({0x8086, 0x0b07}, by_arrival.sysfs.c_str(), by_arrival.devfs.c_str());
-  ASSERT_TRUE(plain.open(&by_arrival.io, "", "", kW, kH, 6 * kMs, 500).is_ok());
+  ASSERT_TRUE(plain.open(&by_arrival.io, "", "", same_size(kW, kH), 6 * kMs, 500).is_ok());
   EXPECT_FALSE(plain.reads_metadata()) << "no camera clock rate configured";
   script.play(&by_arrival);
   for (;;) {
@@ -606,7 +636,8 @@ TEST(V4l2Recovery, AnUnpluggedSensorIsRetriedAtABoundedPaceUntilItIsBack) {
 TEST(V4l2, TheRealDeviceWhenThereIsOne) {
   SystemV4l2Io io;
   V4l2Source source;
-  const Status s = source.open(&io, "/dev/video0", "/dev/video1", 640, 480, 20 * kMs, 1000);
+  const Status s =
+      source.open(&io, "/dev/video0", "/dev/video1", same_size(640, 480), 20 * kMs, 1000);
   if (!s.is_ok() && std::string(s.message()).find("No such file") != std::string::npos) {
     GTEST_SKIP() << "no /dev/video0 on this machine";
   }

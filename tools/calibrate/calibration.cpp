@@ -74,6 +74,7 @@ bool calibrate_rgbd(const std::vector<cv::Mat>& colour, const std::vector<cv::Ma
   }
   out->colour = calibrate_one(object, in_colour, colour[0].size());
   out->depth = calibrate_one(object, in_depth, depth_ir[0].size());
+  out->depth_size = depth_ir[0].size();
   // Each camera's intrinsics as calibrated alone; the stereo step finds only the extrinsics.
   cv::Mat K_d(out->depth.K), K_c(out->colour.K);
   cv::Mat dist_d(out->depth.distortion), dist_c(out->colour.distortion);
@@ -103,6 +104,7 @@ std::string config_keys(const RgbdCalibration& c) {
       "both %.3f px\n"
       "camera.fx = %.3f\ncamera.fy = %.3f\ncamera.cx = %.3f\ncamera.cy = %.3f\n"
       "camera.k1 = %.6f\ncamera.k2 = %.6f\ncamera.p1 = %.6f\ncamera.p2 = %.6f\ncamera.k3 = %.6f\n"
+      "depth_camera.width = %d\ndepth_camera.height = %d\n"
       "depth_camera.fx = %.3f\ndepth_camera.fy = %.3f\ndepth_camera.cx = %.3f\n"
       "depth_camera.cy = %.3f\ndepth_camera.k1 = %.6f\ndepth_camera.k2 = %.6f\n"
       "depth_camera.p1 = %.6f\ndepth_camera.p2 = %.6f\ndepth_camera.k3 = %.6f\n"
@@ -110,8 +112,8 @@ std::string config_keys(const RgbdCalibration& c) {
       "depth_camera.register = true\n",
       c.views, k.rms_px, d.rms_px, c.stereo_rms_px, k.K(0, 0), k.K(1, 1), k.K(0, 2), k.K(1, 2),
       k.distortion[0], k.distortion[1], k.distortion[2], k.distortion[3], k.distortion[4],
-      d.K(0, 0), d.K(1, 1), d.K(0, 2), d.K(1, 2), d.distortion[0], d.distortion[1], d.distortion[2],
-      d.distortion[3], d.distortion[4], pose);
+      c.depth_size.width, c.depth_size.height, d.K(0, 0), d.K(1, 1), d.K(0, 2), d.K(1, 2),
+      d.distortion[0], d.distortion[1], d.distortion[2], d.distortion[3], d.distortion[4], pose);
   return text;
 }
 

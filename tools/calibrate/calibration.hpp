@@ -25,8 +25,9 @@ struct CameraCalibration {
 
 struct RgbdCalibration {
   CameraCalibration colour, depth;
-  cv::Matx33d R_c_d;  // colour camera from depth camera
-  cv::Vec3d t_c_d;    // metres
+  cv::Size depth_size;  // the depth camera's image (a D4xx's may differ from colour's)
+  cv::Matx33d R_c_d;    // colour camera from depth camera
+  cv::Vec3d t_c_d;      // metres
   double stereo_rms_px = 0.0;
   int views = 0;  // views where both cameras found the board
 };

@@ -57,10 +57,14 @@ bool run_ours(const std::string& sequence, const Params& params, int max_frames,
 
 bool run_opencv(const std::string& sequence, const Params& params, int max_frames,
                 std::vector<StampedPose>* estimates, LatencyStats* t) {
+  if (params.depth_camera.register_to_colour) {
+    return fail("OpenCV's RgbdOdometry takes depth registered to colour (depth_camera.register)") ==
+           0;
+  }
   TumReplaySource source;
   const Status s =
-      source.open(sequence.c_str(), params.camera.width_px, params.camera.height_px,
-                  params.sensor.max_rgb_depth_dt_ns, params.sensor.depth_time_offset_ns);
+      source.open(sequence.c_str(), sensor_image_size(params), params.sensor.max_rgb_depth_dt_ns,
+                  params.sensor.depth_time_offset_ns);
   if (!s.is_ok()) return fail(s.message()) == 0;
   const cv::Mat K = (cv::Mat_<double>(3, 3) << params.camera.fx_px, 0, params.camera.cx_px, 0,
                      params.camera.fy_px, params.camera.cy_px, 0, 0, 1);

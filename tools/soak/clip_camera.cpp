@@ -41,7 +41,7 @@ bool ClipCamera::load(const std::string& dir, std::vector<std::vector<uint8_t>>*
                       std::vector<std::vector<uint16_t>>* depth, std::vector<int64_t>* stamps_ns) {
   constexpr int kW = 640, kH = 480;
   TumReplaySource clip;
-  if (!clip.open(dir.c_str(), kW, kH, 20'000'000, 0).is_ok()) return false;
+  if (!clip.open(dir.c_str(), same_size(kW, kH), 20'000'000, 0).is_ok()) return false;
   ImageU8 g;
   ImageU16 d;
   g.allocate(kW, kH);

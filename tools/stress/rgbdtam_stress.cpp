@@ -21,10 +21,10 @@ int usage() {
                "                [--seed <n>]\n"
                "  rgbdtam-stress there-and-back <in> <out> --config <file>\n"
                "  rgbdtam-stress unregister <in> <out> --config <file> [--focal-scale <f>]\n"
-               "                [--baseline-m <m>]\n"
+               "                [--baseline-m <m>] [--depth-size <w>x<h>]\n"
                "  rgbdtam-stress dither <in> <out> --config <file> [--seed <n>]\n"
                "  rgbdtam-stress two-camera <out> [--frames <n>] [--focal-scale <f>]\n"
-               "                [--baseline-m <m>]\n"
+               "                [--baseline-m <m>] [--depth-size <w>x<h>]\n"
                "  rgbdtam-stress pan <out> --peak-deg-s <deg/s> [--frames <n>] [--fps <hz>]\n"
                "  rgbdtam-stress degenerate <out> --scene corridor|room [--frames <n>]\n"
                "  rgbdtam-stress wall <out> --distance-m <m> --yaw-deg <deg> [--frames <n>]\n"
@@ -48,7 +48,7 @@ int main(int argc, char** argv) {
   std::string kind, scene;
   unsigned seed = 1;
   double exposure_ms = 0, peak = 0, fps = 30, gap_s = 1.0, distance_m = 0, yaw_deg = 0;
-  double focal_scale = 1.08, baseline_m = 0.025;
+  DepthCameraShape depth_camera;
   int every = 0, burst = 0, period = 0, frames = 150;
   std::vector<std::string> positional;
   for (int i = 2; i < argc; ++i) {
@@ -75,9 +75,13 @@ int main(int argc, char** argv) {
     } else if (a == "--distance-m" && has) {
       distance_m = std::atof(argv[++i]);
     } else if (a == "--focal-scale" && has) {
-      focal_scale = std::atof(argv[++i]);
+      depth_camera.focal_scale = std::atof(argv[++i]);
     } else if (a == "--baseline-m" && has) {
-      baseline_m = std::atof(argv[++i]);
+      depth_camera.baseline_m = std::atof(argv[++i]);
+    } else if (a == "--depth-size" && has) {
+      if (std::sscanf(argv[++i], "%dx%d", &depth_camera.width_px, &depth_camera.height_px) != 2) {
+        return usage();
+      }
     } else if (a == "--yaw-deg" && has) {
       yaw_deg = std::atof(argv[++i]);
     } else if (a == "--frames" && has) {
@@ -108,7 +112,7 @@ int main(int argc, char** argv) {
   } else if (verb == "there-and-back" && positional.size() == 2 && config != nullptr) {
     ok = there_and_back(positional[0], positional[1], config);
   } else if (verb == "unregister" && positional.size() == 2 && config != nullptr) {
-    ok = unregister_depth(positional[0], positional[1], config, focal_scale, baseline_m);
+    ok = unregister_depth(positional[0], positional[1], config, depth_camera);
   } else if (verb == "dither" && positional.size() == 2 && config != nullptr) {
     ok = dither_depth(positional[0], positional[1], config, seed);
   } else if (verb == "concat" && positional.size() == 3) {
@@ -125,7 +129,7 @@ int main(int argc, char** argv) {
     if (!ok) std::fprintf(stderr, "repeated: no scene '%s' (--list names them)\n", scene.c_str());
     ok = ok && repeated_sequence(positional[0], s, frames);
   } else if (verb == "two-camera" && positional.size() == 1) {
-    ok = two_camera_sequence(positional[0], frames, focal_scale, baseline_m);
+    ok = two_camera_sequence(positional[0], frames, depth_camera);
   } else if (verb == "pan" && positional.size() == 1) {
     ok = pan_sequence(positional[0], peak, frames, fps);
   } else {

@@ -374,12 +374,13 @@ bool repeated_sequence(const std::string& out, const RepeatedScene& scene, int f
     return false;
   }
   SyntheticFrame current;
-  const bool ok = write_sequence(out, scene.camera.width_px, scene.camera.height_px, frames,
-                                 scene.fps, [&](int i, SE3* T_w_c) -> const SyntheticFrame& {
-                                   *T_w_c = scene.camera_at(i);
-                                   current = scene.render(i);
-                                   return current;
-                                 });
+  const bool ok =
+      write_sequence(out, same_size(scene.camera.width_px, scene.camera.height_px), frames,
+                     scene.fps, [&](int i, SE3* T_w_c) -> const SyntheticFrame& {
+                       *T_w_c = scene.camera_at(i);
+                       current = scene.render(i);
+                       return current;
+                     });
   SyntheticScene camera_only;
   camera_only.camera = scene.camera;
   camera_only.depth_factor = scene.depth_factor;

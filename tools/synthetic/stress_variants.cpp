@@ -296,13 +296,15 @@ bool blur_sequence(const std::string& in, const std::string& out, const std::str
   if (!(exposure_ms > 0.0)) return fail("blur: the exposure must be positive");
   Params p;
   if (!load_params(config, &p)) return false;
+  if (p.depth_camera.register_to_colour)
+    return fail("blur: the depth must be registered to colour");
   std::vector<StampedPose> gt;
   int bad = 0;
   Status s = read_tum_trajectory((in + "/groundtruth.txt").c_str(), &gt, &bad);
   if (!s.is_ok()) return fail(s.message());
   const Trajectory truth(gt);
   TumReplaySource source;
-  s = source.open(in.c_str(), p.camera.width_px, p.camera.height_px, p.sensor.max_rgb_depth_dt_ns,
+  s = source.open(in.c_str(), sensor_image_size(p), p.sensor.max_rgb_depth_dt_ns,
                   p.sensor.depth_time_offset_ns);
   if (!s.is_ok()) return fail(s.message());
   if (!make_output(in, out) || ::mkdir((out + "/rgb").c_str(), 0755) != 0 ||
@@ -346,15 +348,15 @@ bool blur_sequence(const std::string& in, const std::string& out, const std::str
 }
 
 namespace {
-// Every depth frame of in written anew into out as move(depth, out_pixels) makes it; colour,
-// stamps and ground truth as recorded.
+// Every depth frame of in (at p's sizes) written anew into out, out_width x out_height, as
+// move(depth, out_pixels) makes it; colour, stamps and ground truth as recorded.
 template <typename Move>
-bool rewrite_depth(const std::string& in, const std::string& out, const Params& p,
-                   const std::string& header, Move move) {
-  const PinholeIntrinsics& c = p.camera;
+bool rewrite_depth(const std::string& in, const std::string& out, const Params& p, int out_width,
+                   int out_height, const std::string& header, Move move) {
+  const SensorImageSize size = sensor_image_size(p);
   TumReplaySource source;
-  Status s = source.open(in.c_str(), c.width_px, c.height_px, p.sensor.max_rgb_depth_dt_ns,
-                         p.sensor.depth_time_offset_ns);
+  Status s =
+      source.open(in.c_str(), size, p.sensor.max_rgb_depth_dt_ns, p.sensor.depth_time_offset_ns);
   if (!s.is_ok()) return fail(s.message());
   if (!make_output(in, out) || ::mkdir((out + "/depth").c_str(), 0755) != 0 ||
       !copy_file(in, out, "rgb.txt", true) || !copy_file(in, out, "groundtruth.txt", true) ||
@@ -364,9 +366,9 @@ bool rewrite_depth(const std::string& in, const std::string& out, const Params& 
   std::vector<std::string> depth_lines = {"# " + header};
   ImageU8 gray;
   ImageU16 depth;
-  gray.allocate(c.width_px, c.height_px);
-  depth.allocate(c.width_px, c.height_px);
-  std::vector<uint16_t> moved(static_cast<size_t>(c.width_px) * c.height_px);
+  gray.allocate(size.width_px, size.height_px);
+  depth.allocate(size.depth_width_px, size.depth_height_px);
+  std::vector<uint16_t> moved(static_cast<size_t>(out_width) * out_height);
   int64_t last_stamp_ns = -1;
   for (;;) {
     SensorFrame frame;
@@ -378,7 +380,7 @@ bool rewrite_depth(const std::string& in, const std::string& out, const Params& 
     last_stamp_ns = frame.depth_timestamp_ns;
     move(frame.depth, moved.data());
     const std::string name = "depth/" + std::to_string(depth_lines.size() - 1) + ".png";
-    if (!write_png_gray16(out + "/" + name, c.width_px, c.height_px, moved.data())) {
+    if (!write_png_gray16(out + "/" + name, out_width, out_height, moved.data())) {
       return fail("cannot write " + out + "/" + name);
     }
     char stamp[32];
@@ -407,31 +409,46 @@ bool write_depth_camera_keys(const std::string& out, const Params& p,
   return write_lines(out + "/depth_camera.conf", conf);
 }
 
-// A depth camera beside the colour camera k: baseline_m to its side, focal_scale times its
-// focal length, its principal point moved, under a degree of rotation.
-DepthCameraParams depth_camera_beside(const PinholeIntrinsics& k, double focal_scale,
-                                      double baseline_m) {
+// The shape's depth camera beside the colour camera k: its principal point off the image's
+// centre by another amount than k's.
+DepthCameraParams depth_camera_beside(const PinholeIntrinsics& k, const DepthCameraShape& shape) {
+  const int w = shape.width_px > 0 ? shape.width_px : k.width_px;
+  const int h = shape.height_px > 0 ? shape.height_px : k.height_px;
   DepthCameraParams d;
   d.register_to_colour = true;
-  d.intrinsics = {k.fx_px * focal_scale,
-                  k.fy_px * focal_scale,
-                  k.cx_px + 4.0,
-                  k.cy_px - 3.0,
-                  k.width_px,
-                  k.height_px};
-  d.T_c_d = SE3(so3_exp(Vector3d(0.004, -0.008, 0.005)), Vector3d(baseline_m, 0.001, -0.002));
+  d.intrinsics = {k.fx_px * shape.focal_scale,
+                  k.fy_px * shape.focal_scale,
+                  k.cx_px + 0.5 * (w - k.width_px) + 4.0,
+                  k.cy_px + 0.5 * (h - k.height_px) - 3.0,
+                  w,
+                  h};
+  d.T_c_d = SE3(so3_exp(Vector3d(0.004, -0.008, 0.005)), Vector3d(shape.baseline_m, 0.001, -0.002));
   return d;
+}
+
+bool valid_shape(const char* verb, const DepthCameraShape& shape) {
+  const bool sized = (shape.width_px == 0 && shape.height_px == 0) ||
+                     (shape.width_px >= 16 && shape.height_px >= 16 && shape.width_px <= 4096 &&
+                      shape.height_px <= 4096);
+  if (shape.focal_scale > 0.5 && shape.focal_scale < 2.0 && std::fabs(shape.baseline_m) < 0.2 &&
+      sized) {
+    return true;
+  }
+  return fail(std::string(verb) +
+              ": the focal scale must be within 0.5-2, the baseline within 0.2 m and the depth "
+              "size within 16x16-4096x4096");
 }
 }  // namespace
 
 bool unregister_depth(const std::string& in, const std::string& out, const std::string& config,
-                      double focal_scale, double baseline_m) {
+                      const DepthCameraShape& shape) {
   Params p;
   if (!load_params(config, &p)) return false;
-  if (!(focal_scale > 0.5 && focal_scale < 2.0) || !(std::fabs(baseline_m) < 0.2)) {
-    return fail("unregister: the focal scale must be within 0.5-2 and the baseline within 0.2 m");
+  if (!valid_shape("unregister", shape)) return false;
+  if (p.depth_camera.register_to_colour) {
+    return fail("unregister: the depth of " + in + " must be registered to colour already");
   }
-  DepthCameraParams depth_camera = depth_camera_beside(p.camera, focal_scale, baseline_m);
+  DepthCameraParams depth_camera = depth_camera_beside(p.camera, shape);
   depth_camera.distortion.k1 = -0.04;
   depth_camera.distortion.k2 = 0.01;
   DepthRegistration to_depth_camera;
@@ -439,7 +456,8 @@ bool unregister_depth(const std::string& in, const std::string& out, const std::
                        CameraModel{depth_camera.intrinsics, depth_camera.distortion},
                        depth_camera.T_c_d.inverse(), p.sensor.depth_factor);
   if (!rewrite_depth(
-          in, out, p, "depth of " + in + " in a depth camera of its own",
+          in, out, p, depth_camera.intrinsics.width_px, depth_camera.intrinsics.height_px,
+          "depth of " + in + " in a depth camera of its own",
           [&](const uint16_t* depth, uint16_t* moved) { to_depth_camera.apply(depth, moved); })) {
     return false;
   }
@@ -454,16 +472,17 @@ bool dither_depth(const std::string& in, const std::string& out, const std::stri
   if (!load_params(config, &p)) return false;
   std::mt19937 rng(seed);
   std::uniform_int_distribution<int> step(-1, 1);
-  const size_t n = static_cast<size_t>(p.camera.width_px) * p.camera.height_px;
-  return rewrite_depth(
-      in, out, p, "depth of " + in + " dithered by one raw unit, seed " + std::to_string(seed),
-      [&](const uint16_t* depth, uint16_t* dithered) {
-        for (size_t i = 0; i < n; ++i) {
-          const int v = depth[i];  // holes and the top value stay as they are
-          dithered[i] =
-              static_cast<uint16_t>(v == 0 || v == 65535 ? v : std::max(1, v + step(rng)));
-        }
-      });
+  const SensorImageSize size = sensor_image_size(p);
+  const size_t n = size.depth_pixels();
+  return rewrite_depth(in, out, p, size.depth_width_px, size.depth_height_px,
+                       "depth of " + in + " dithered by one raw unit, seed " + std::to_string(seed),
+                       [&](const uint16_t* depth, uint16_t* dithered) {
+                         for (size_t i = 0; i < n; ++i) {
+                           const int v = depth[i];  // holes and the top value stay as they are
+                           dithered[i] = static_cast<uint16_t>(
+                               v == 0 || v == 65535 ? v : std::max(1, v + step(rng)));
+                         }
+                       });
 }
 
 namespace {
@@ -541,16 +560,14 @@ bool noise_sequence(const std::string& in, const std::string& out, const std::st
   return colour_ok && depth_ok;
 }
 
-bool two_camera_sequence(const std::string& out, int frames, double focal_scale,
-                         double baseline_m) {
-  if (frames < 2 || !(focal_scale > 0.5 && focal_scale < 2.0) || !(std::fabs(baseline_m) < 0.2)) {
-    return fail("two-camera: frames >= 2, the focal scale within 0.5-2, the baseline within 0.2 m");
-  }
+bool two_camera_sequence(const std::string& out, int frames, const DepthCameraShape& shape) {
+  if (frames < 2) return fail("two-camera: frames >= 2");
+  if (!valid_shape("two-camera", shape)) return false;
   constexpr double kFps = 30.0;
   SyntheticScene scene;
   scene.diagonal_path = true;  // parallax: the box hides other wall from each camera
   const Params p = synthetic_params(scene);
-  const DepthCameraParams depth_camera = depth_camera_beside(scene.camera, focal_scale, baseline_m);
+  const DepthCameraParams depth_camera = depth_camera_beside(scene.camera, shape);
   SyntheticScene depth_scene = scene;
   depth_scene.camera = depth_camera.intrinsics;
   const std::string exact = out + "/exact", own = out + "/depth_camera";
@@ -575,8 +592,9 @@ bool two_camera_sequence(const std::string& out, int frames, double focal_scale,
   std::vector<float> errors_mm, edge_errors_mm;
   long exact_pixels = 0, filled = 0, wrong = 0, edge_pixels = 0, edge_filled = 0;
   SyntheticFrame shown;
-  const bool written =
-      write_sequence(own, w, h, frames, kFps, [&](int i, SE3* T_w_c) -> const SyntheticFrame& {
+  const bool written = write_sequence(
+      own, {w, h, kd.width_px, kd.height_px}, frames, kFps,
+      [&](int i, SE3* T_w_c) -> const SyntheticFrame& {
         *T_w_c = scene.camera_at(i / kFps);
         const SyntheticFrame& colour = rendered[static_cast<size_t>(i)];
         shown.gray = colour.gray;
@@ -595,8 +613,9 @@ bool two_camera_sequence(const std::string& out, int frames, double focal_scale,
                           kd.fx_px * in_depth_camera.x() / in_depth_camera.z() + kd.cx_px)),
                       v = static_cast<int>(std::lround(
                           kd.fy_px * in_depth_camera.y() / in_depth_camera.z() + kd.cy_px));
-            if (u < 0 || v < 0 || u >= w || v >= h) continue;
-            const double seen = shown.depth[static_cast<size_t>(v) * w + u] / scene.depth_factor;
+            if (u < 0 || v < 0 || u >= kd.width_px || v >= kd.height_px) continue;
+            const double seen =
+                shown.depth[static_cast<size_t>(v) * kd.width_px + u] / scene.depth_factor;
             if (std::fabs(seen - in_depth_camera.z()) > 0.02 * in_depth_camera.z()) continue;
             bool edge = false;
             for (int dy = -2; dy <= 2; ++dy) {
@@ -687,7 +706,7 @@ bool wall_sequence(const std::string& out, double distance_m, double yaw_deg, in
     }
   }
   const bool ok = create_folder(out) &&
-                  write_sequence(out, k.width_px, k.height_px, frames, 30.0,
+                  write_sequence(out, same_size(k.width_px, k.height_px), frames, 30.0,
                                  [&](int, SE3* T_w_c) -> const SyntheticFrame& {
                                    *T_w_c = SE3();
                                    return f;

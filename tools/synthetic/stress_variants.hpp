@@ -6,6 +6,15 @@
 
 namespace rgbdtam::testing {
 
+// A depth camera beside the colour camera, as a RealSense or Orbbec has one: baseline_m to its
+// side, focal_scale times its focal length, its own principal point and distortion, under a
+// degree of rotation, and an image of its own size (0: the colour camera's).
+struct DepthCameraShape {
+  double focal_scale = 1.08;
+  double baseline_m = 0.025;
+  int width_px = 0, height_px = 0;
+};
+
 // Every n-th colour frame (the same motion, n times faster); images are linked, not copied.
 bool decimate_sequence(const std::string& in, const std::string& out, int n);
 // A sensor outage: `count` colour frames from the `first` cut out.
@@ -52,24 +61,21 @@ bool concatenate(const std::string& first, const std::string& second, const std:
 bool wander_sequence(const std::string& in, const std::string& out, const std::string& config,
                      int frames, unsigned seed);
 // The depth of a sequence registered to colour moved out into a depth camera of its own, as a
-// RealSense or Orbbec over plain UVC delivers it: baseline_m to the side of the colour camera,
-// focal_scale times its focal length, another principal point and distortion, under a degree of
-// rotation (nearest surface wins; what it cannot see is a hole). out/depth_camera.conf holds the
-// keys that register it back (depth_camera.*).
+// RealSense or Orbbec over plain UVC delivers it (nearest surface wins; what it cannot see is a
+// hole). out/depth_camera.conf holds the keys that register it back (depth_camera.*).
 bool unregister_depth(const std::string& in, const std::string& out, const std::string& config,
-                      double focal_scale = 1.08, double baseline_m = 0.025);
+                      const DepthCameraShape& shape = DepthCameraShape());
 // The depth of a sequence with every measured pixel moved by -1, 0 or +1 raw unit (from a fixed
 // seed), less than any sensor's noise: tracking the copies of one sequence made with several
 // seeds shows how much of an accuracy number is the one draw of noise the recording holds.
 bool dither_depth(const std::string& in, const std::string& out, const std::string& config,
                   unsigned seed);
 // The synthetic room on its diagonal path (parallax around the box) seen by the colour camera and
-// by a depth camera of its own (depth_camera_beside: baseline_m aside, focal_scale times the
-// focal length, under a degree of rotation; pinhole, no distortion): out/exact holds colour
+// by a depth camera of its own (shape; pinhole, no distortion): out/exact holds colour
 // with the depth rendered in the colour camera, out/depth_camera the same colour with the depth
 // camera's depth and the keys that register it. Prints how registration compares with the exact
 // depth (pixels filled, errors, near occlusion edges apart).
-bool two_camera_sequence(const std::string& out, int frames, double focal_scale, double baseline_m);
+bool two_camera_sequence(const std::string& out, int frames, const DepthCameraShape& shape);
 // A degenerate synthetic scene (SyntheticScene::Layout: "corridor" or "room"), 30 Hz.
 bool degenerate_sequence(const std::string& out, const std::string& layout, int frames);
 

@@ -23,8 +23,8 @@ struct SyntheticFrame {
     frame.timestamp_ns = static_cast<int64_t>(std::llround(i / fps * 1e9));
     frame.gray = gray.data();
     frame.depth = depth.data();
-    frame.width_px = k.width_px;
-    frame.height_px = k.height_px;
+    frame.width_px = frame.depth_width_px = k.width_px;
+    frame.height_px = frame.depth_height_px = k.height_px;
     return frame;
   }
 };

@@ -64,7 +64,7 @@ bool write_text(const std::string& path, const std::string& text) {
   return std::fclose(f) == 0;
 }
 
-bool write_sequence(const std::string& dir, int width, int height, int frames, double fps,
+bool write_sequence(const std::string& dir, const SensorImageSize& size, int frames, double fps,
                     const std::function<const SyntheticFrame&(int, SE3*)>& frame) {
   ::mkdir((dir + "/rgb").c_str(), 0755);
   ::mkdir((dir + "/depth").c_str(), 0755);
@@ -84,8 +84,10 @@ bool write_sequence(const std::string& dir, int width, int height, int frames, d
     char rs[32], ds[32];
     stamp(t0 + t, rs, sizeof(rs));
     stamp(t0 + t + 0.005, ds, sizeof(ds));
-    ok = write_png_gray8(dir + "/rgb/" + rs + ".png", width, height, f.gray.data()) &&
-         write_png_gray16(dir + "/depth/" + ds + ".png", width, height, f.depth.data());
+    ok = write_png_gray8(dir + "/rgb/" + rs + ".png", size.width_px, size.height_px,
+                         f.gray.data()) &&
+         write_png_gray16(dir + "/depth/" + ds + ".png", size.depth_width_px, size.depth_height_px,
+                          f.depth.data());
     std::fprintf(rgb, "%s rgb/%s.png\n", rs, rs);
     std::fprintf(depth, "%s depth/%s.png\n", ds, ds);
     write_pose(gt, t0 + t, T_w_c);
@@ -99,7 +101,7 @@ bool write_sequence(const std::string& dir, int width, int height, int frames, d
 bool write_synthetic_sequence(const std::string& dir, const SyntheticScene& scene, int frames,
                               double fps) {
   const std::vector<SyntheticFrame>& rendered = scene.render_path(frames, fps);
-  return write_sequence(dir, scene.camera.width_px, scene.camera.height_px, frames, fps,
+  return write_sequence(dir, same_size(scene.camera.width_px, scene.camera.height_px), frames, fps,
                         [&](int i, SE3* T_w_c) -> const SyntheticFrame& {
                           *T_w_c = scene.camera_at(i / fps);
                           return rendered[static_cast<size_t>(i)];

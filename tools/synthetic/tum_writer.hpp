@@ -18,8 +18,9 @@ bool write_png_gray16(const std::string& path, int w, int h, const uint16_t* px)
 std::vector<uint8_t> encode_jpeg(const uint8_t* gray, int w, int h, int quality);
 
 // A TUM folder (rgb/, depth/, rgb.txt, depth.txt, groundtruth.txt, camera-to-world) of
-// `frames` frames at `fps`: frame(i, &T_w_c) gives each. Depth is stamped 5 ms after colour.
-bool write_sequence(const std::string& dir, int width, int height, int frames, double fps,
+// `frames` frames at `fps`: frame(i, &T_w_c) gives each, its depth at size's depth size. Depth
+// is stamped 5 ms after colour.
+bool write_sequence(const std::string& dir, const SensorImageSize& size, int frames, double fps,
                     const std::function<const SyntheticFrame&(int, SE3*)>& frame);
 // Renders `frames` frames of the scene's path at `fps` into a TUM folder (write_sequence).
 bool write_synthetic_sequence(const std::string& dir, const SyntheticScene& scene, int frames,

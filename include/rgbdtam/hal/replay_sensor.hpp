@@ -27,8 +27,8 @@ class ReplaySensor : public LiveSensor {
  public:
   static constexpr int kFrameTimeoutMs = 1000;
   ~ReplaySensor() override;
-  // Init time: allocates the slots for the source's frames (width x height).
-  void open(TumReplaySource* source, int width, int height);
+  // Init time: allocates the slots for the (opened) source's frames.
+  void open(TumReplaySource* source);
   // Init time: no frame is overtaken or dropped; each waits until the previous one is taken.
   void hold_every_frame() { every_frame_ = true; }
   Status start(const ThreadPlacement& placement) override;

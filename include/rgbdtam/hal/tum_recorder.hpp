@@ -28,8 +28,9 @@ class TumRecorder {
  public:
   static constexpr int kQueueSlots = 8;
   ~TumRecorder();
-  // Creates out_dir (which must not hold a recording already) and its lists.
-  Status open(const char* out_dir, int width, int height);
+  // Creates out_dir (which must not hold a recording already) and its lists; frames of other
+  // sizes are refused (counted as dropped).
+  Status open(const char* out_dir, const SensorImageSize& size);
   Status start(const ThreadPlacement& placement);
   // Sensor side: copies the frame into a free slot; false when the queue is full (counted).
   bool push(const SensorFrame& frame);
@@ -63,7 +64,7 @@ class TumRecorder {
   Status store_encoded(const char* folder, int64_t stamp_ns, int list_fd);
 
   char dir_[400] = {};
-  int width_ = 0, height_ = 0;
+  SensorImageSize size_;
   int rgb_list_ = -1, depth_list_ = -1;
   int64_t last_depth_ns_ = -1;  // two colour frames may share one depth frame
   SpscRing<Slot> queue_;

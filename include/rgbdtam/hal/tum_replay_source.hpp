@@ -35,13 +35,14 @@ struct ReplayCounters {
 
 class TumReplaySource : public SensorSource {
  public:
-  Status open(const char* folder, int width, int height, int64_t max_rgb_depth_dt_ns,
+  Status open(const char* folder, const SensorImageSize& size, int64_t max_rgb_depth_dt_ns,
               int64_t depth_time_offset_ns);
   Status next(SensorFrame* frame, Status* warning) override;
-  // The same, decoding into the caller's images (width x height) instead of the source's own.
+  // The same, decoding into the caller's images (of the sizes opened) instead of the source's own.
   Status next_into(ImageU8* gray, ImageU16* depth, SensorFrame* frame, Status* warning);
 
   int frame_count() const { return rgb_.size; }
+  const SensorImageSize& size() const { return size_; }
   // The index of the frame next() delivers, and a jump forward to a later one.
   int position() const { return cursor_; }
   void skip_to(int index) { cursor_ = index > cursor_ ? index : cursor_; }
@@ -57,7 +58,7 @@ class TumReplaySource : public SensorSource {
   TumList rgb_, depth_;
   std::unique_ptr<int[]> depth_match_;  // per colour frame, index into depth_ or -1
   int cursor_ = 0;
-  int width_ = 0, height_ = 0;
+  SensorImageSize size_;
   PngDecoder png_;
   std::unique_ptr<uint8_t[]> file_buf_;
   size_t file_capacity_ = 0;

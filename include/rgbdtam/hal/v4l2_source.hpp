@@ -124,9 +124,11 @@ enum class V4l2Colour { kYuyv, kMjpeg };
 class V4l2Source : public LiveSensor {
  public:
   // depth_path: the Z16 node; colour_path: the colour node (YUYV or MJPEG), both empty when
-  // locate_by_usb() was called first; frames width x height on both.
-  Status open(V4l2Io* io, const char* depth_path, const char* colour_path, int width, int height,
-              int64_t max_pair_dt_ns, int timeout_ms, V4l2Colour colour = V4l2Colour::kYuyv);
+  // locate_by_usb() was called first; each node streams at its image's size (a D4xx's depth
+  // camera has its own, such as 848x480 beside colour's 640x480).
+  Status open(V4l2Io* io, const char* depth_path, const char* colour_path,
+              const SensorImageSize& size, int64_t max_pair_dt_ns, int timeout_ms,
+              V4l2Colour colour = V4l2Colour::kYuyv);
   // Init time, before open(): the nodes are found by the camera's USB id and what they offer
   // (V4l2NodeFinder), at every open, since a USB reset may renumber them.
   void locate_by_usb(const UsbId& usb, const char* sysfs_root, const char* devfs_root);
@@ -179,7 +181,7 @@ class V4l2Source : public LiveSensor {
   JpegDecoder jpeg_;
   ImageU8 gray_;
   ImageU16 depth_img_;
-  int width_ = 0, height_ = 0;
+  SensorImageSize size_;
   int64_t max_pair_dt_ns_ = 0;
   int timeout_ms_ = 0;
   uint32_t sequence_ = 0;

@@ -3,6 +3,7 @@
 // poses are T_w_c (world from camera), world = the first keyframe's camera frame.
 
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 
 #include <Eigen/LU>
@@ -21,14 +22,33 @@ namespace rgbdtam {
 // tracker on the same thread. The pixel buffers belong to the source and stay valid until
 // its next frame.
 struct SensorFrame {
-  uint32_t sequence = 0;            // index in the source, counting skipped frames
-  int64_t timestamp_ns = 0;         // colour exposure
-  int64_t depth_timestamp_ns = 0;   // 0 when there is no depth for this frame
-  const uint8_t* gray = nullptr;    // width*height, 8-bit grey, distorted (raw)
-  const uint16_t* depth = nullptr;  // width*height raw depth registered to colour, or null
+  uint32_t sequence = 0;           // index in the source, counting skipped frames
+  int64_t timestamp_ns = 0;        // colour exposure
+  int64_t depth_timestamp_ns = 0;  // 0 when there is no depth for this frame
+  const uint8_t* gray = nullptr;   // width*height, 8-bit grey, distorted (raw)
+  // depth_width*depth_height raw depth, or null: registered to colour (and of its size) unless
+  // the sensor's depth camera has its own (depth_camera.register), until DepthInColour moves it.
+  const uint16_t* depth = nullptr;
   int width_px = 0;
   int height_px = 0;
+  int depth_width_px = 0;
+  int depth_height_px = 0;
 };
+
+// The sizes a sensor delivers its two images at.
+struct SensorImageSize {
+  int width_px = 0, height_px = 0;              // colour
+  int depth_width_px = 0, depth_height_px = 0;  // depth
+  size_t pixels() const { return static_cast<size_t>(width_px) * static_cast<size_t>(height_px); }
+  size_t depth_pixels() const {
+    return static_cast<size_t>(depth_width_px) * static_cast<size_t>(depth_height_px);
+  }
+};
+
+// Both images of one size (a sensor that registers depth to colour).
+inline SensorImageSize same_size(int width_px, int height_px) {
+  return {width_px, height_px, width_px, height_px};
+}
 
 // Estimator health bits in PoseEstimate::flags.
 enum PoseFlags : uint32_t {

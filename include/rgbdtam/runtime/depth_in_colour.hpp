@@ -24,6 +24,7 @@ class DepthInColour {
 
  private:
   bool on_ = false;
+  int depth_width_px_ = 0, depth_height_px_ = 0;  // as the sensor delivers it
   DepthRegistration registration_;
   ImageU16 registered_;
   SensorFrame frame_;

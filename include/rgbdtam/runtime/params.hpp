@@ -12,6 +12,7 @@
 #include "rgbdtam/core/status.hpp"
 #include "rgbdtam/core/tracker.hpp"
 #include "rgbdtam/core/tracking_health.hpp"
+#include "rgbdtam/port/messages.hpp"
 #include "rgbdtam/runtime/key_value.hpp"
 
 namespace rgbdtam {
@@ -38,7 +39,7 @@ struct SensorModel {
 // (core/depth_registration). Off where the device registers (Kinect v1, OpenNI2, TUM data).
 struct DepthCameraParams {
   bool register_to_colour = false;
-  PinholeIntrinsics intrinsics;  // its size is the colour camera's
+  PinholeIntrinsics intrinsics;  // its size 0x0 when it is the colour camera's
   RadTanDistortion distortion;
   SE3 T_c_d;  // colour camera from depth camera
 };
@@ -131,6 +132,9 @@ constexpr double kMaxVelocityGapS = 0.2;
 // a keyframe has aliases at all.
 double alias_range_m(const Params& p);
 
+// The sizes the sensor is opened at: depth at its camera's own (depth_camera.width/height) or
+// colour's.
+SensorImageSize sensor_image_size(const Params& p);
 // The tracker's options with the sensor's noise model in them.
 TrackerOptions tracking_options(const Params& p);
 // The health limits with the covariance calibration in them.
