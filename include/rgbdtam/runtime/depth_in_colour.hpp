@@ -1,8 +1,8 @@
 #pragma once
 // The frame as the tracker and the obstacle reporter take it: its depth in the colour camera.
 // A sensor that registers depth itself passes through; one whose depth comes from a camera of
-// its own (depth_camera.register) has it moved into the colour camera here, into a buffer
-// allocated at init.
+// its own (depth_camera.register), at that camera's size, has it moved into the colour camera
+// here, into a buffer allocated at init.
 
 #include "rgbdtam/core/depth_registration.hpp"
 #include "rgbdtam/port/messages.hpp"
