@@ -9,6 +9,8 @@ namespace rgbdtam {
 Status RecordJob::init(const RunOptions& options, const char* out_dir) {
   options_ = options;
   RGBDTAM_RETURN_IF_ERROR(load_board_and_params(options, &board_, &params_));
+  // A recording keeps the depth as its camera measured it, to be registered when replayed.
+  board_.sensor_registration_thread = false;
   RGBDTAM_RETURN_IF_ERROR(open_board_sensor(board_, params_, &sensor_));
   return recorder_.open(out_dir, sensor_image_size(params_));
 }

@@ -192,6 +192,16 @@ Status open_board_sensor(const Board& board, const Params& params, BoardSensor* 
     recovery.reset_usb = true;
   }
   RGBDTAM_RETURN_IF_ERROR(open_backend(board, params, sensor, v4l2_io));
+  if (board.sensor_registration_thread) {
+    if (!params.depth_camera.register_to_colour) {
+      return Status::error(StatusCode::kInvalidArgument,
+                           "board '%s': sensor.registration_thread needs depth_camera.register = "
+                           "true in its sensor.config (%s)",
+                           board.name, board.sensor_config);
+    }
+    sensor->registering.init(sensor->live, params);
+    sensor->live = &sensor->registering;
+  }
   recovery.stall_ns = board.sensor_stall_ms * 1'000'000LL;
   recovery.reopen_budget_ns = board.sensor_reopen_budget_ms * 1'000'000LL;
   recovery.error_interval_ns = static_cast<int64_t>(1e9 / board.sensor_fps);
@@ -214,7 +224,10 @@ Status RunJob::init(const RunOptions& options) {
                                               memory_budget(board_.memory_budget_mb),
                                               &memory_needed_bytes_));
   RGBDTAM_RETURN_IF_ERROR(open_board_sensor(board_, params_, &sensor_, options.v4l2_io));
-  if (options.replay_every_frame) sensor_.replay_sensor.hold_every_frame();
+  if (options.replay_every_frame) {
+    sensor_.replay_sensor.hold_every_frame();
+    sensor_.registering.hold_every_frame();
+  }
   if (std::strcmp(board_.link_kind, "udp") == 0) {
     char ip[64];
     uint16_t port = 0;

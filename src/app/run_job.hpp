@@ -18,6 +18,7 @@
 #include "rgbdtam/hal/openni2_source.hpp"
 #endif
 #include "rgbdtam/runtime/firmware.hpp"
+#include "rgbdtam/runtime/registering_sensor.hpp"
 
 namespace rgbdtam {
 
@@ -58,7 +59,8 @@ struct BoardSensor {
 #if RGBDTAM_WITH_OPENNI2
   OpenNi2Source openni2;
 #endif
-  SensorRecovery recovery;  // wraps whichever backend is open
+  RegisteringSensor registering;  // the backend on a thread of its own (registration_thread)
+  SensorRecovery recovery;        // wraps whichever backend is open
   LiveSensor* live = nullptr;
 };
 Status open_board_sensor(const Board& board, const Params& params, BoardSensor* sensor,

@@ -47,6 +47,10 @@ const KeySpec kSpecs[] = {
      "v4l2: the camera clock's rate in its UVC metadata (D4xx: 1000000); frames are stamped and "
      "paired on it (0: by arrival)",
      RGBDTAM_FIELD(sensor_clock_hz), false},
+    {"sensor.registration_thread", ValueType::kBool, 0, 1, "",
+     "depth registered to colour (depth_camera.register) on the sensor's own thread, beside "
+     "tracking, instead of on the tracker's",
+     RGBDTAM_FIELD(sensor_registration_thread), false},
     {"sensor.stall_ms", ValueType::kInt, 100, 60000, "ms",
      "no frame for this long: USB reset (with sensor.usb_id) and reopen",
      RGBDTAM_FIELD(sensor_stall_ms), false},

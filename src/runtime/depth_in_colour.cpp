@@ -25,18 +25,22 @@ void DepthInColour::init(const Params& params) {
 }
 
 const SensorFrame& DepthInColour::apply(const SensorFrame& frame) {
-  frame_ = frame;
-  if (!on_) return frame_;
+  apply_into(frame, registered_.data(), &frame_);
+  return frame_;
+}
+
+void DepthInColour::apply_into(const SensorFrame& frame, uint16_t* depth, SensorFrame* out) {
+  *out = frame;
+  if (!on_) return;
   RGBDTAM_ASSERT(
       frame.depth_width_px == depth_width_px_ && frame.depth_height_px == depth_height_px_,
       "sensor depth size differs from the configured depth camera");
   if (frame.depth != nullptr) {
-    registration_.apply(frame.depth, registered_.data());
-    frame_.depth = registered_.data();
+    registration_.apply(frame.depth, depth);
+    out->depth = depth;
   }
-  frame_.depth_width_px = registered_.width();
-  frame_.depth_height_px = registered_.height();
-  return frame_;
+  out->depth_width_px = registered_.width();
+  out->depth_height_px = registered_.height();
 }
 
 size_t DepthInColour::bytes_needed(const Params& params) {

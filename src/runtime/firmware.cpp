@@ -10,6 +10,8 @@ Status FirmwareRuntime::init(const Params& params, const Board& board, ByteLink*
                              GpioOutputs* gpio, ClockFn clock, const Vocabulary* vocabulary) {
   RGBDTAM_RETURN_IF_ERROR(validate_board(board));
   params_ = params;
+  // Depth registered on the sensor's thread reaches the tracker as a registering device's does.
+  if (board.sensor_registration_thread) params_.depth_camera = DepthCameraParams();
   params_.map_threaded = true;
   params_.loop.threaded = true;
   RGBDTAM_RETURN_IF_ERROR(apply_board_capacity(board, &params_));

@@ -16,6 +16,7 @@
 #include "fake_v4l2.hpp"
 #include "record_job.hpp"
 #include "replay_job.hpp"
+#include "replay_runner.hpp"
 #include "rgbdtam/hal/file.hpp"
 #include "rgbdtam/hal/sensor_recovery.hpp"
 #include "rgbdtam/hal/udp_link.hpp"
@@ -201,6 +202,21 @@ TEST(Allocations, NoneInTheFirmwareRuntimeAcrossItsThreads) {
       "allocations after init\n",
       c.frames, job.runtime().slam().mapper().counters().keyframes_mapped,
       static_cast<unsigned long long>(job.runtime().link().counters().odometry_sent), calls);
+}
+
+TEST(Allocations, NoneInTheFirmwareRuntimeRegisteringDepthOnTheSensorsThread) {
+  const std::string dir = testing::make_temp_dir("alloc_registration_thread");
+  const std::string config = testing::clip_in_a_depth_camera_of_its_own(dir);
+  ASSERT_FALSE(config.empty());
+  RunJob job;
+  const long calls =
+      count_firmware_allocations({"sensor.device=" + dir + "/d435", "sensor.config=" + config,
+                                  "sensor.registration_thread=true"},
+                                 &job);
+  const FirmwareCounters& c = job.runtime().counters();
+  EXPECT_EQ(c.frames + job.sensor_dropped(), 50u);
+  EXPECT_GT(c.tracked, 0u);
+  EXPECT_EQ(calls, 0) << g_bytes.load() << " bytes allocated after init";
 }
 
 TEST(Allocations, NoneInTheFirmwareRuntimeInAMapSavedWhileRunningOrLocalisedIn) {

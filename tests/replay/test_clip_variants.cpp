@@ -2,11 +2,6 @@
 // with noise for its images, and wandered over. Whatever cannot be tracked is reported lost.
 #include <gtest/gtest.h>
 
-#include <fstream>
-#include <sstream>
-
-#include "config_text.hpp"
-
 #include "replay_runner.hpp"
 #include "stress_variants.hpp"
 #include "test_paths.hpp"
@@ -40,22 +35,8 @@ TEST(ClipVariants, DepthFromACameraOfItsOwnSizeIsRegisteredAndTrackedAsTheRegist
   const std::string dir = testing::make_temp_dir("clip_depth_camera");
   const std::string clip = testing::source_path("data/tum_fr1_xyz_clip");
   const std::string config = testing::source_path("config/tum_fr1.conf");
-  testing::DepthCameraShape d435;
-  d435.focal_scale = 0.85;
-  d435.width_px = 848;
-  d435.height_px = 480;
-  ASSERT_TRUE(testing::unregister_depth(clip, dir + "/d435", config, d435));
-  // The shipped config with the keys the tool wrote (its vocabulary found where it lies).
-  const std::string combined = dir + "/d435.conf";
-  {
-    std::ifstream base(config), keys(dir + "/d435/depth_camera.conf");
-    std::stringstream base_text, key_text;
-    base_text << base.rdbuf();
-    key_text << keys.rdbuf();
-    std::ofstream(combined) << testing::with_changes(
-        base_text.str(), key_text.str() + "loop.vocabulary = " +
-                             testing::source_path("data/vocabulary/tum-k10-l4.voc") + "\n");
-  }
+  const std::string combined = testing::clip_in_a_depth_camera_of_its_own(dir);
+  ASSERT_FALSE(combined.empty());
   const auto registered = testing::replay_and_evaluate(clip, config);
   const auto moved = testing::replay_and_evaluate(dir + "/d435", combined);
   ASSERT_TRUE(moved.ran) << moved.status.message();

@@ -83,6 +83,37 @@ TEST(Firmware, HostEmulationStreamsEveryPoseAndMatchesReplay) {
   EXPECT_NEAR(received.ate.rmse_m, replay.report.ate.rmse_m, 0.001);
 }
 
+// A D435's depth moved into colour on the sensor's own thread (sensor.registration_thread, for a
+// board whose tracker core has no room for it) or on the tracker's: the same poses, to the
+// threaded mapper's variation.
+TEST(Firmware, RegistrationOnTheSensorsThreadTracksAsOnTheTrackers) {
+  const std::string dir = testing::make_temp_dir("firmware_registration_thread");
+  const std::string config = testing::clip_in_a_depth_camera_of_its_own(dir);
+  ASSERT_FALSE(config.empty());
+  std::vector<StampedPose> gt;
+  int bad = 0;
+  ASSERT_TRUE(read_tum_trajectory((dir + "/d435/groundtruth.txt").c_str(), &gt, &bad).is_ok());
+  double ate_m[2] = {0, 0};
+  for (const bool thread : {false, true}) {
+    testing::Monitor monitor;
+    RunJob job;
+    testing::run_board(&monitor, &job,
+                       {"sensor.device=" + dir + "/d435", "sensor.config=" + config,
+                        std::string("sensor.registration_thread=") + (thread ? "true" : "false")},
+                       "", true);
+    const FirmwareCounters& c = job.runtime().counters();
+    EXPECT_EQ(c.frames, 50u) << "every frame, held for the tracker";
+    EXPECT_EQ(c.tracked, c.frames) << thread;
+    const EvaluationReport received = evaluate_all(gt, monitor.poses, nullptr);
+    ASSERT_TRUE(received.ate_ok);
+    ate_m[thread] = received.ate.rmse_m;
+  }
+  std::printf("registered on the tracker's thread: ATE %.3f cm; on the sensor's: %.3f cm\n",
+              ate_m[0] * 100, ate_m[1] * 100);
+  EXPECT_NEAR(ate_m[1], ate_m[0], 0.001);
+  EXPECT_LT(ate_m[1], 0.01);
+}
+
 TEST(Firmware, SensorErrorsReachTheOperatorAsStatusTextAndAFaultBlink) {
   testing::SyntheticScene scene = testing::SyntheticScene::half_resolution();
   const std::string dir = testing::make_temp_dir("firmware_broken");

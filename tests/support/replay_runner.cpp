@@ -2,8 +2,14 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <sstream>
+
 #include "config_files.hpp"
+#include "config_text.hpp"
 #include "rgbdtam/hal/tum_trajectory.hpp"
+#include "stress_variants.hpp"
+#include "test_paths.hpp"
 
 namespace rgbdtam::testing {
 
@@ -57,6 +63,27 @@ void expect_tracked_or_lost(const ReplayOutcome& out, const std::string& label,
               label.c_str(), out.report.ate.rmse_m * 100, 100 * out.report.coverage.fraction(),
               out.report.false_valid.count, out.report.false_valid.checked, out.counters.lost,
               out.counters.retried);
+}
+
+std::string clip_in_a_depth_camera_of_its_own(const std::string& dir) {
+  const std::string config = source_path("config/tum_fr1.conf");
+  DepthCameraShape d435;
+  d435.focal_scale = 0.85;
+  d435.width_px = 848;
+  d435.height_px = 480;
+  if (!unregister_depth(source_path("data/tum_fr1_xyz_clip"), dir + "/d435", config, d435)) {
+    return "";
+  }
+  // The vocabulary named where it lies, since the config moves out of the source tree.
+  std::ifstream base(config), keys(dir + "/d435/depth_camera.conf");
+  std::stringstream base_text, key_text;
+  base_text << base.rdbuf();
+  key_text << keys.rdbuf();
+  const std::string combined = dir + "/d435.conf";
+  std::ofstream(combined) << with_changes(
+      base_text.str(),
+      key_text.str() + "loop.vocabulary = " + source_path("data/vocabulary/tum-k10-l4.voc") + "\n");
+  return combined;
 }
 
 }  // namespace rgbdtam::testing

@@ -30,6 +30,12 @@ ReplayOutcome replay_and_evaluate(const std::string& sequence, const std::string
                                   std::initializer_list<const char*> overrides = {},
                                   MapSink* map_sink = nullptr, MapFiles map_files = {});
 
+// The committed clip as a D435 over V4L2 delivers it: its depth moved into a depth camera of
+// its own (848x480, focal x0.85, 2.5 cm aside; rgbdtam-stress unregister) as dir/d435. Returns
+// the shipped config with the keys that register it back, written as dir/d435.conf ("" when
+// the clip could not be moved).
+std::string clip_in_a_depth_camera_of_its_own(const std::string& dir);
+
 // The robust-tracking promise on a replayed sequence: every frame is tracked or reported lost,
 // never a wrong pose reported as tracked (false-valid), and at least min_coverage of the frames
 // with ground truth get a pose. Prints the figures under label.

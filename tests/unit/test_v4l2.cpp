@@ -14,6 +14,7 @@
 #include "rgbdtam/hal/sensor_recovery.hpp"
 #include "rgbdtam/hal/v4l2_nodes.hpp"
 #include "rgbdtam/hal/v4l2_source.hpp"
+#include "rgbdtam/runtime/registering_sensor.hpp"
 #include "test_paths.hpp"
 #include "tum_writer.hpp"
 
@@ -246,6 +247,68 @@ TEST(V4l2, ADepthCameraOfItsOwnSizeIsStreamedAtItAndAnotherSizeNamesWhatItOffers
   EXPECT_EQ(f.depth_height_px, kDepthH);
   EXPECT_EQ(f.depth[kDepthW * kDepthH - 1], 3 * 100 + kDepthW * kDepthH - 1) << "every row copied";
   EXPECT_EQ(f.gray[kW * kH - 1], 51);
+}
+
+// A D435 on a Raspberry Pi 4: its depth moved into colour on the sensor's own thread.
+TEST(V4l2, RegistrationOnTheSensorsThreadGivesTheTrackerWhatItWouldHaveMadeAndEveryError) {
+  constexpr int kDepthW = 24, kDepthH = 12;
+  Params params;
+  params.camera = {14.0, 14.0, 7.5, 3.5, kW, kH};
+  params.depth_camera.register_to_colour = true;
+  params.depth_camera.intrinsics = {19.0, 19.0, 11.5, 5.5, kDepthW, kDepthH};
+  params.depth_camera.T_c_d = SE3(Eigen::Quaterniond::Identity(), Vector3d(0.015, 0, 0));
+  params.sensor.depth_factor = 1000.0;
+  Rig threaded, direct;
+  for (Rig* r : {&threaded, &direct}) {
+    r->depth->width = kDepthW;
+    r->depth->height = kDepthH;
+    ASSERT_TRUE(
+        r->source
+            .open(&r->io, "/dev/video0", "/dev/video1", {kW, kH, kDepthW, kDepthH}, 10 * kMs, 500)
+            .is_ok());
+    for (int i = 0; i < 6; ++i) {
+      r->depth->script.push_back(frame(1000 + 33 * i, static_cast<uint8_t>(3 + i)));
+      r->colour->script.push_back(frame(1001 + 33 * i, static_cast<uint8_t>(50 + i)));
+    }
+    r->depth->script.push_back({Event::kUnplug, 1300 * kMs});
+  }
+  RegisteringSensor sensor;
+  sensor.init(&threaded.source, params);
+  sensor.hold_every_frame();
+  ASSERT_TRUE(sensor.start(ThreadPlacement{}).is_ok());
+  DepthInColour on_the_trackers_thread;
+  on_the_trackers_thread.init(params);
+  SensorFrame f;
+  Status warning;
+  for (int i = 0; i < 3; ++i) {
+    SensorFrame raw;
+    ASSERT_TRUE(sensor.next(&f, &warning).is_ok()) << i;
+    ASSERT_TRUE(direct.source.next(&raw, &warning).is_ok()) << i;
+    const SensorFrame& want = on_the_trackers_thread.apply(raw);
+    EXPECT_EQ(f.timestamp_ns, want.timestamp_ns);
+    EXPECT_EQ(f.depth_width_px, kW);
+    EXPECT_EQ(f.depth_height_px, kH);
+    EXPECT_TRUE(std::equal(f.gray, f.gray + kW * kH, want.gray)) << i;
+    EXPECT_TRUE(std::equal(f.depth, f.depth + kW * kH, want.depth)) << i;
+    EXPECT_GT(std::count_if(f.depth, f.depth + kW * kH, [](uint16_t d) { return d > 0; }), 0);
+  }
+  // A reopen, as the stall recovery makes it: the thread pauses, the device opens again, and
+  // frames flow on (what the thread held when it paused is let go, as the device's own are).
+  const int64_t before_ns = f.timestamp_ns;
+  ASSERT_TRUE(sensor.reopen().is_ok());
+  EXPECT_EQ(threaded.depth->opens, 2);
+  ASSERT_TRUE(sensor.next(&f, &warning).is_ok());
+  EXPECT_GT(f.timestamp_ns, before_ns);
+  // Unplugged: every error reaches the tracker in turn (the thread waits for each to be taken,
+  // so a dead device cannot spin it), and stopping does not wait for the device.
+  int errors = 0;
+  for (int k = 0; k < 8 && errors < 3; ++k) {
+    const Status s = sensor.next(&f, &warning);
+    EXPECT_NE(s.code(), StatusCode::kEndOfStream) << k;
+    errors += s.is_ok() ? 0 : 1;
+  }
+  EXPECT_EQ(errors, 3);
+  sensor.stop();
 }
 
 TEST(V4l2, AnUnpluggedDeviceEndsInAnErrorNotAHang) {

@@ -49,9 +49,10 @@ struct Board {
   char sysfs_root[kTextBytes] = "/sys";  // where sysfs is mounted
   char devfs_root[kTextBytes] = "/dev";  // where devtmpfs is (usbfs nodes for a reset)
   double sensor_fps = 30.0;
-  double sensor_clock_hz = 0.0;        // v4l2: the camera clock in its metadata; 0: not used
-  int sensor_stall_ms = 1000;          // no frame for this long: reset and reopen the sensor
-  int sensor_reopen_budget_ms = 3000;  // reopen attempts after a reset, within this time
+  double sensor_clock_hz = 0.0;             // v4l2: the camera clock in its metadata; 0: not used
+  bool sensor_registration_thread = false;  // registration on the sensor's thread (run only)
+  int sensor_stall_ms = 1000;               // no frame for this long: reset and reopen the sensor
+  int sensor_reopen_budget_ms = 3000;       // reopen attempts after a reset, within this time
 
   char link_kind[kTextBytes] = "";        // udp | serial
   char link_udp_remote[kTextBytes] = "";  // ip:port

@@ -17,6 +17,9 @@ class DepthInColour {
   // The frame with its depth in the colour camera; valid until the next call (it may point
   // into this object).
   const SensorFrame& apply(const SensorFrame& frame);
+  // The same into the caller's buffer (colour's size), for a sensor thread that keeps several
+  // frames: out points into it, or passes through when nothing is moved.
+  void apply_into(const SensorFrame& frame, uint16_t* depth, SensorFrame* out);
   // The last apply()'s result.
   const SensorFrame& last() const { return frame_; }
   // Bytes init allocates for these params.
