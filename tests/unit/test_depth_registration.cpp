@@ -106,6 +106,20 @@ Comparison compare(const std::vector<uint16_t>& registered, const std::vector<ui
   return c;
 }
 
+// The scene rendered exactly in both cameras, the depth camera's registered into the colour
+// camera, and compared with the colour camera's.
+Comparison register_and_compare(const CameraModel& depth_camera, const CameraModel& colour,
+                                const SE3& T_c_d) {
+  const std::vector<uint16_t> measured = render(depth_camera, T_c_d);
+  const std::vector<uint16_t> exact = render(colour, SE3());
+  DepthRegistration registration;
+  registration.init(depth_camera, colour, T_c_d, kFactor);
+  std::vector<uint16_t> registered(exact.size(), 1);
+  registration.apply(measured.data(), registered.data());
+  return compare(registered, exact,
+                 seen_by_depth_camera(exact, colour, measured, depth_camera, T_c_d));
+}
+
 double percentile(const std::vector<double>& sorted, double p) {
   return sorted[static_cast<size_t>(p * static_cast<double>(sorted.size() - 1))];
 }
@@ -126,14 +140,7 @@ class Registration : public ::testing::Test {
 };
 
 TEST_F(Registration, DepthFromItsOwnCameraLandsWhereTheColourCameraSeesIt) {
-  const std::vector<uint16_t> measured = render(depth_camera_, T_c_d_);
-  const std::vector<uint16_t> exact = render(colour_, SE3());
-  DepthRegistration registration;
-  registration.init(depth_camera_, colour_, T_c_d_, kFactor);
-  std::vector<uint16_t> registered(exact.size(), 1);
-  registration.apply(measured.data(), registered.data());
-  const Comparison c = compare(
-      registered, exact, seen_by_depth_camera(exact, colour_, measured, depth_camera_, T_c_d_));
+  const Comparison c = register_and_compare(depth_camera_, colour_, T_c_d_);
   const double median = percentile(c.errors_m, 0.5), p95 = percentile(c.errors_m, 0.95);
   std::printf(
       "registered: %d of the %d pixels both cameras see filled (%.2f %%), error median %.2f mm, "
@@ -166,17 +173,10 @@ TEST_F(Registration, ADepthImageOfAnotherSizeLandsInTheColourCamera) {
   const Shape shapes[] = {
       {"424x240, 88 degrees wide", {220.0, 220.0, 213.5, 118.0, 424, 240}},
       {"160x120, half colour's focal length", {131.0, 131.0, 80.5, 58.5, 160, 120}}};
-  const std::vector<uint16_t> exact = render(colour_, SE3());
   for (const Shape& shape : shapes) {
     CameraModel depth_camera = depth_camera_;
     depth_camera.intrinsics = shape.intrinsics;
-    const std::vector<uint16_t> measured = render(depth_camera, T_c_d_);
-    DepthRegistration registration;
-    registration.init(depth_camera, colour_, T_c_d_, kFactor);
-    std::vector<uint16_t> registered(exact.size(), 1);
-    registration.apply(measured.data(), registered.data());
-    const Comparison c = compare(
-        registered, exact, seen_by_depth_camera(exact, colour_, measured, depth_camera, T_c_d_));
+    const Comparison c = register_and_compare(depth_camera, colour_, T_c_d_);
     const double median = percentile(c.errors_m, 0.5), p95 = percentile(c.errors_m, 0.95);
     std::printf(
         "%s: %d of the %d pixels both see filled, error median %.2f mm, p95 %.2f mm, %d "

@@ -94,13 +94,14 @@ TEST(Params, BadValuesNameTheFileAndTheKey) {
 }
 
 // Issue 36: a depth camera of its own, registered in software.
+const char* kDepthCamera =
+    "depth_camera.fx = 420\ndepth_camera.fy = 421\ndepth_camera.cx = 318\n"
+    "depth_camera.cy = 241\ndepth_camera.k1 = -0.05\n"
+    "depth_camera.T_c_d = 1 0 0 0 -0.015 0 0\ndepth_camera.register = true\n";
+
 TEST(Params, ADepthCameraOfItsOwnIsReadAndAnIncompleteOneRefused) {
-  const std::string depth_camera =
-      "depth_camera.fx = 420\ndepth_camera.fy = 421\ndepth_camera.cx = 318\n"
-      "depth_camera.cy = 241\ndepth_camera.k1 = -0.05\n"
-      "depth_camera.T_c_d = 1 0 0 0 -0.015 0 0\ndepth_camera.register = true\n";
   Params p;
-  ASSERT_TRUE(parse(testing::with_changes(kMinimal, depth_camera), &p).is_ok());
+  ASSERT_TRUE(parse(testing::with_changes(kMinimal, kDepthCamera), &p).is_ok());
   EXPECT_TRUE(p.depth_camera.register_to_colour);
   EXPECT_EQ(p.depth_camera.intrinsics.fy_px, 421.0);
   EXPECT_EQ(p.depth_camera.distortion.k1, -0.05);
@@ -117,10 +118,7 @@ TEST(Params, ADepthCameraOfItsOwnIsReadAndAnIncompleteOneRefused) {
 }
 
 TEST(Params, TheDepthImageIsColoursSizeUnlessItsCameraGivesItsOwn) {
-  const std::string depth_camera =
-      "depth_camera.fx = 420\ndepth_camera.fy = 421\ndepth_camera.cx = 318\n"
-      "depth_camera.cy = 241\ndepth_camera.T_c_d = 1 0 0 0 -0.015 0 0\n"
-      "depth_camera.register = true\n";
+  const std::string depth_camera = kDepthCamera;
   Params p;
   ASSERT_TRUE(parse(testing::with_changes(kMinimal, depth_camera), &p).is_ok());
   SensorImageSize size = sensor_image_size(p);
