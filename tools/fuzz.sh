@@ -19,18 +19,25 @@ mkdir -p "$out"
 flags=(-std=c++17 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all -Iinclude
        -isystem /usr/include/eigen3)
 
-# Objects are shared by the targets of one run (the core is compiled once), never across runs.
+# Each folder's sources are compiled as one unit (as the CMake build's unity batches: Eigen's
+# templates instantiated once), shared by the targets of one run (the core is compiled once),
+# never across runs.
 rm -rf "$out/obj"
 mkdir -p "$out/obj"
-build() {  # name, sources... (the ones not yet compiled in parallel, then linked)
-  local name=$1 objects=() missing=()
+build() {  # name, sources... (the units not yet compiled, in parallel, then linked)
+  local name=$1 objects=() missing=() dir files unit
   shift
-  for src in "$@"; do
-    objects+=("$out/obj/$(echo "$src" | tr / _).o")
-    [ -f "${objects[-1]}" ] || missing+=("$src")
+  for dir in $(printf '%s\n' "$@" | xargs -n1 dirname | sort -u); do
+    files=()
+    for src in "$@"; do [ "$(dirname "$src")" != "$dir" ] || files+=("$PWD/$src"); done
+    unit="$out/obj/$(echo "$dir" | tr / _)_$(printf '%s\n' "${files[@]}" | md5sum | cut -c1-12)"
+    objects+=("$unit.o")
+    [ -f "$unit.o" ] && continue
+    printf '#include "%s"\n' "${files[@]}" >"$unit.cpp"
+    missing+=("$unit")
   done
   [ ${#missing[@]} -eq 0 ] || printf '%s\n' "${missing[@]}" | xargs -P "$(nproc)" -I{} sh -c \
-    'clang++ "$@" -c {} -o "'"$out/obj"'/$(echo {} | tr / _).o"' _ "${flags[@]}"
+    'clang++ "$@" -c {}.cpp -o {}.o' _ "${flags[@]}"
   clang++ "${flags[@]}" "${objects[@]}" -lpng -lz -o "$out/fuzz_$name"
 }
 

@@ -15,6 +15,16 @@ constexpr size_t kMaxConfigBytes = 1 << 20;
 constexpr size_t kMaxVocabularyBytes = size_t{256} << 20;
 }  // namespace
 
+Status load_board(const char* board_dir, Board* out) {
+  char path[kTextBytes + 16];
+  std::snprintf(path, sizeof(path), "%s/board.conf", board_dir);
+  char* text = nullptr;
+  RGBDTAM_RETURN_IF_ERROR(read_text_file(path, kMaxConfigBytes, &text));
+  const Status s = parse_board(text, path, board_dir, out);
+  delete[] text;
+  return s;
+}
+
 Status read_params_file(const char* path, Params* p) {
   char* text = nullptr;
   RGBDTAM_RETURN_IF_ERROR(read_text_file(path, kMaxConfigBytes, &text));

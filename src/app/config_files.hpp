@@ -1,14 +1,17 @@
 #pragma once
-// Reading the files a run is configured by: the parameter file (its relative paths resolved
-// against its own folder) and the place-recognition vocabulary it names.
+// Reading the files a run is configured by: the board's file, the parameter file (its relative
+// paths resolved against its own folder) and the place-recognition vocabulary it names.
 
 #include <memory>
 #include "rgbdtam/core/vocabulary.hpp"
 
+#include "rgbdtam/runtime/board.hpp"
 #include "rgbdtam/runtime/params.hpp"
 
 namespace rgbdtam {
 
+// Reads board_dir/board.conf and validates it.
+Status load_board(const char* board_dir, Board* out);
 Status read_params_file(const char* path, Params* p);
 // Loads params.loop.vocabulary when loop.enabled; true when one was. A config that names none
 // runs without loop closure, with a warning; one that cannot be read is an *error.

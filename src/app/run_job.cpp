@@ -23,19 +23,6 @@
 #include "summary_lines.hpp"
 
 namespace rgbdtam {
-namespace {
-constexpr size_t kMaxConfigBytes = 1 << 20;
-}  // namespace
-
-Status load_board(const char* board_dir, Board* out) {
-  char path[kTextBytes + 16];
-  std::snprintf(path, sizeof(path), "%s/board.conf", board_dir);
-  char* text = nullptr;
-  RGBDTAM_RETURN_IF_ERROR(read_text_file(path, kMaxConfigBytes, &text));
-  const Status s = parse_board(text, path, board_dir, out);
-  delete[] text;
-  return s;
-}
 
 Status load_board_and_params(const RunOptions& options, Board* board, Params* params) {
   if (options.board_dir == nullptr) {

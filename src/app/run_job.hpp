@@ -39,8 +39,6 @@ struct RunOptions {
   bool replay_every_frame = false;
 };
 
-// Reads board_dir/board.conf and validates it.
-Status load_board(const char* board_dir, Board* out);
 // The board with its overrides, validated, and its params file with theirs.
 Status load_board_and_params(const RunOptions& options, Board* board, Params* params);
 // Whether this build has the backend a sensor.kind names (RGBDTAM_HAL_BACKENDS lists them).

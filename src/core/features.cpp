@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "rgbdtam/core/xorshift.hpp"
+
 namespace rgbdtam {
 namespace {
 // The 16 pixels of the radius-3 Bresenham circle, clockwise from the top.
@@ -21,13 +23,6 @@ bool has_arc_of_nine(uint32_t mask) {
   uint32_t run = m;
   for (int i = 1; i < 9; ++i) run &= m >> i;
   return run != 0;
-}
-
-uint32_t xorshift(uint32_t* s) {
-  *s ^= *s << 13;
-  *s ^= *s >> 17;
-  *s ^= *s << 5;
-  return *s;
 }
 
 void smooth_rows(const ImageF& in, ImageF* out) {
@@ -77,7 +72,7 @@ void FeatureExtractor::allocate(int width, int height, const FeatureOptions& opt
   auto coordinate = [&]() {
     for (;;) {
       double s = 0.0;
-      for (int i = 0; i < 4; ++i) s += static_cast<double>(xorshift(&seed)) / 4294967295.0 - 0.5;
+      for (int i = 0; i < 4; ++i) s += static_cast<double>(xorshift32(&seed)) / 4294967295.0 - 0.5;
       const double v = s * (31.0 / 5.0) / std::sqrt(4.0 / 12.0);
       if (std::fabs(v) <= kPatternRadius) return v;
     }

@@ -4,15 +4,10 @@
 #include <algorithm>
 #include <cmath>
 
+#include "rgbdtam/core/xorshift.hpp"
+
 namespace rgbdtam {
 namespace {
-uint32_t next_random(uint32_t* s) {
-  *s ^= *s << 13;
-  *s ^= *s >> 17;
-  *s ^= *s << 5;
-  return *s;
-}
-
 double threshold_m(const PointPair& p, const RigidRansacOptions& opt) {
   const double z = std::max(p.a.z(), p.b.z());
   return std::max(opt.min_threshold_m, opt.sigmas * opt.inverse_depth_sigma * z * z);
@@ -78,9 +73,9 @@ RigidRansacResult rigid_ransac(const PointPair* pairs, int n, const RigidRansacO
   double sum_sq = 0.0;
   for (int it = 0; it < opt.iterations; ++it) {
     PointPair sample[3];
-    const int i0 = static_cast<int>(next_random(&seed) % n);
-    const int i1 = static_cast<int>(next_random(&seed) % n);
-    const int i2 = static_cast<int>(next_random(&seed) % n);
+    const int i0 = static_cast<int>(xorshift32(&seed) % n);
+    const int i1 = static_cast<int>(xorshift32(&seed) % n);
+    const int i2 = static_cast<int>(xorshift32(&seed) % n);
     if (i0 == i1 || i1 == i2 || i0 == i2) continue;
     sample[0] = pairs[i0], sample[1] = pairs[i1], sample[2] = pairs[i2];
     SE3 T;

@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "rgbdtam/core/byte_io.hpp"
+#include "rgbdtam/core/xorshift.hpp"
 
 namespace rgbdtam {
 namespace {
@@ -12,13 +13,6 @@ constexpr char kMagic[8] = {'R', 'G', 'B', 'D', 'V', 'O', 'C', '1'};
 constexpr size_t kHeaderBytes = 8 + 4 * 4;
 constexpr size_t kNodeBytes = 32 + 4 + 2 + 2 + 4 + 4;
 constexpr int kKMediansIterations = 10;
-
-uint32_t next_random(uint32_t* s) {
-  *s ^= *s << 13;
-  *s ^= *s >> 17;
-  *s ^= *s << 5;
-  return *s;
-}
 
 // Bitwise majority of the members: the binary k-medians centre.
 Descriptor majority(const std::vector<Descriptor>& all, const std::vector<int>& members) {
@@ -40,7 +34,7 @@ std::vector<std::vector<int>> cluster(const std::vector<Descriptor>& all,
                                       std::vector<Descriptor>* centres) {
   const int n = static_cast<int>(members.size());
   centres->clear();
-  centres->push_back(all[members[next_random(seed) % n]]);
+  centres->push_back(all[members[xorshift32(seed) % n]]);
   std::vector<double> nearest(n);
   while (static_cast<int>(centres->size()) < k) {
     double total = 0.0;
@@ -51,7 +45,7 @@ std::vector<std::vector<int>> cluster(const std::vector<Descriptor>& all,
       total += nearest[i];
     }
     if (total == 0.0) break;  // fewer distinct descriptors than k
-    double pick = total * (next_random(seed) / 4294967296.0);
+    double pick = total * (xorshift32(seed) / 4294967296.0);
     int chosen = n - 1;
     for (int i = 0; i < n; ++i) {
       pick -= nearest[i];

@@ -89,15 +89,17 @@ void JpegArena::put(void* block) {
   }
 }
 
-namespace {
 // libjpeg reports errors through error_exit, which must not return: back to decode() by
 // longjmp (no object with a destructor lives between the two). Warnings (corrupt data that
-// libjpeg decodes around) are kept, and make the frame an error too.
+// libjpeg decodes around) are kept, and make the frame an error too. Not in an anonymous
+// namespace: JpegDecoder::State holds one.
 struct JpegError {
   jpeg_error_mgr manager;  // first: libjpeg's pointer to it is a pointer to this
   std::jmp_buf jump;
   char message[JMSG_LENGTH_MAX];
 };
+
+namespace {
 
 void on_error(j_common_ptr cinfo) {
   auto* error = reinterpret_cast<JpegError*>(cinfo->err);

@@ -23,13 +23,13 @@ void read_bytes(png_structp png, png_bytep out, size_t n) {
   r->pos += n;
 }
 
-constexpr size_t kArenaFixedBytes = 96 * 1024;  // png/info structs, zlib state and window
+constexpr size_t kDecoderArenaFixedBytes = 96 * 1024;  // png/info structs, zlib state and window
 }  // namespace
 
 void PngDecoder::allocate(int max_width) {
   max_width_ = max_width;
   // libpng keeps two rows of up to 4 channels x 16 bits, plus its fixed state.
-  arena_.allocate(kArenaFixedBytes + 4 * (static_cast<size_t>(max_width) * 8 + 64));
+  arena_.allocate(kDecoderArenaFixedBytes + 4 * (static_cast<size_t>(max_width) * 8 + 64));
   row_.reset(new uint8_t[static_cast<size_t>(max_width) * 8]);
 }
 

@@ -16,12 +16,12 @@ void flush_bytes(png_structp) {}
 
 // zlib's deflate state at the default window and memory level (about 256 KB) and libpng's own
 // structs and row buffers.
-constexpr size_t kArenaFixedBytes = 384 * 1024;
+constexpr size_t kEncoderArenaFixedBytes = 384 * 1024;
 }  // namespace
 
 void PngEncoder::allocate(int max_width, int max_height) {
   const size_t row = static_cast<size_t>(max_width) * 2 + 1;
-  arena_.allocate(kArenaFixedBytes + 4 * (row + 64));
+  arena_.allocate(kEncoderArenaFixedBytes + 4 * (row + 64));
   // Incompressible data grows by zlib's stored-block overhead only.
   capacity_ = row * static_cast<size_t>(max_height) * 101 / 100 + 64 * 1024;
   out_.reset(new uint8_t[capacity_]);

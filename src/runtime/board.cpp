@@ -12,7 +12,7 @@ namespace {
 #define RGBDTAM_TEXT(key, doc, expr, required) \
   { key, ValueType::kText, 0, 0, "", doc, RGBDTAM_FIELD(expr), required }
 
-const KeySpec kSpecs[] = {
+const KeySpec kBoardSpecs[] = {
     RGBDTAM_TEXT("board.name", "the board's name", name, true),
     RGBDTAM_TEXT("board.description", "what it is", description, false),
     RGBDTAM_TEXT("build.cpu", "-mcpu of its build, e.g. cortex-a72 (host: empty)", cpu, false),
@@ -147,7 +147,7 @@ const KeySpec kSpecs[] = {
 #undef RGBDTAM_TEXT
 #undef RGBDTAM_FIELD
 
-constexpr KeyTable kTable{kSpecs, sizeof(kSpecs) / sizeof(kSpecs[0])};
+constexpr KeyTable kBoardTable{kBoardSpecs, sizeof(kBoardSpecs) / sizeof(kBoardSpecs[0])};
 
 bool one_of(const char* value, const char* const* options, int n) {
   for (int i = 0; i < n; ++i)
@@ -181,7 +181,7 @@ const SensorKindName* find_sensor_kind(const char* name) {
 
 Status parse_board(const char* text, const char* source, const char* board_dir, Board* out) {
   Board b;
-  RGBDTAM_RETURN_IF_ERROR(parse_key_values(text, source, kTable, &b));
+  RGBDTAM_RETURN_IF_ERROR(parse_key_values(text, source, kBoardTable, &b));
   if (std::snprintf(b.directory, sizeof(b.directory), "%s", board_dir) >= kTextBytes) {
     return Status::error(StatusCode::kInvalidArgument, "%s: folder path too long", source);
   }
@@ -196,11 +196,11 @@ Status parse_board(const char* text, const char* source, const char* board_dir, 
 
 void print_board(const Board& in, char* buf, int size, KeyListing listing) {
   Board b = in;
-  print_key_values(kTable, &b, buf, size, listing);
+  print_key_values(kBoardTable, &b, buf, size, listing);
 }
 
 Status set_board_value(const char* assignment, Board* out) {
-  RGBDTAM_RETURN_IF_ERROR(apply_key_value(assignment, "--board-set", kTable, out));
+  RGBDTAM_RETURN_IF_ERROR(apply_key_value(assignment, "--board-set", kBoardTable, out));
   // A path means what it means in the board file: relative to the board folder.
   const char* key = assignment;
   while (*key == ' ' || *key == '\t') ++key;

@@ -1,7 +1,7 @@
 #include "rgbdtam/runtime/link_task.hpp"
 
 #include <chrono>
-#include <cstring>
+#include <cstdio>
 
 namespace rgbdtam {
 
@@ -49,7 +49,7 @@ bool LinkTask::post_status(uint8_t severity, const char* text) {
   LinkMessage m;
   m.kind = LinkMessage::Kind::kStatus;
   m.severity = severity;
-  std::strncpy(m.text, text, sizeof(m.text) - 1);
+  std::snprintf(m.text, sizeof(m.text), "%s", text);
   return post(m);
 }
 

@@ -17,7 +17,6 @@ constexpr int kCovisibleHops = 3;
 // decides): the views of pairs further apart rarely overlap by half.
 constexpr double kNearM = 0.4;
 constexpr double kNearRad = 30.0 * M_PI / 180.0;
-constexpr double kMetresPerRadian = 0.3;  // for ranking by distance, as the tracker's reuse
 // A relation the map does not know (a restart's jump): in the graph for connectedness only.
 constexpr double kUnknownRelationInformation = 1e-6;
 
@@ -30,9 +29,6 @@ bool outside_neighbourhood(const void* context, int slot) {
   return h < 0 || h > kCovisibleHops;
 }
 
-double pose_distance(const SE3& d) {
-  return d.translation().norm() + kMetresPerRadian * so3_log(d.quaternion()).norm();
-}
 }  // namespace
 
 const char* edge_kind_name(EdgeKind kind) {
@@ -343,7 +339,7 @@ int LoopModule::choose_candidates(int query_slot, PlaceCandidate* out) {
     // A place the graph does not join (before a restart, which began at the last valid pose,
     // so the map's guess still holds roughly) is the longest loop of all.
     const Ranked r{slot, hops_[slot] < 0 ? store_->capacity() : hops_[slot],
-                   pose_distance(T_q_w * store_->at_slot(slot).T_w_k)};
+                   ranking_distance_m(T_q_w * store_->at_slot(slot).T_w_k)};
     if (r.hops < 2) continue;  // itself and its neighbours
     const SE3 d = T_q_w * store_->at_slot(slot).T_w_k;
     if (!within(d, kNearM, kNearRad)) continue;

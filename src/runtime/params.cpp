@@ -35,7 +35,7 @@ void print_map_mode(const void* field, char* out, size_t size) {
 #define RGBDTAM_FIELD(expr) [](void* p) -> void* { return &static_cast<Params*>(p)->expr; }
 
 // The schema. Keys are stable: a removed key keeps its line as a comment.
-const KeySpec kSpecs[] = {
+const KeySpec kParamSpecs[] = {
     {"camera.width", ValueType::kInt, 8, 4096, "px", "image width, divisible by 8",
      RGBDTAM_FIELD(camera.width_px), true},
     {"camera.height", ValueType::kInt, 8, 4096, "px", "image height, divisible by 8",
@@ -271,7 +271,7 @@ const KeySpec kSpecs[] = {
 };
 #undef RGBDTAM_FIELD
 
-constexpr KeyTable kTable{kSpecs, sizeof(kSpecs) / sizeof(kSpecs[0])};
+constexpr KeyTable kParamTable{kParamSpecs, sizeof(kParamSpecs) / sizeof(kParamSpecs[0])};
 
 Status check_consistency(const char* source, const Params& p) {
   if (p.camera.width_px % 8 != 0 || p.camera.height_px % 8 != 0) {
@@ -400,7 +400,7 @@ HealthLimits health_limits(const Params& p) {
 Status parse_params(const char* text, const char* source, Params* out) {
   Params p = *out;
   p.loop.vocabulary[0] = '\0';
-  RGBDTAM_RETURN_IF_ERROR(parse_key_values(text, source, kTable, &p));
+  RGBDTAM_RETURN_IF_ERROR(parse_key_values(text, source, kParamTable, &p));
   if (p.loop.vocabulary[0] == '\0') {
     std::memcpy(p.loop.vocabulary, out->loop.vocabulary, sizeof(p.loop.vocabulary));
   } else {
@@ -414,7 +414,7 @@ Status parse_params(const char* text, const char* source, Params* out) {
 
 Status set_param(const char* assignment, const char* source, Params* out) {
   Params p = *out;
-  RGBDTAM_RETURN_IF_ERROR(apply_key_value(assignment, source, kTable, &p));
+  RGBDTAM_RETURN_IF_ERROR(apply_key_value(assignment, source, kParamTable, &p));
   RGBDTAM_RETURN_IF_ERROR(check_consistency(source, p));
   *out = p;
   return Status::ok();
@@ -422,7 +422,7 @@ Status set_param(const char* assignment, const char* source, Params* out) {
 
 void print_params(const Params& in, char* buf, int size, KeyListing listing) {
   Params p = in;
-  print_key_values(kTable, &p, buf, size, listing);
+  print_key_values(kParamTable, &p, buf, size, listing);
 }
 
 }  // namespace rgbdtam

@@ -5,7 +5,6 @@ namespace {
 // The camera may have moved this far from its last valid pose while lost: the places within
 // it are searched by geometry as well as by appearance.
 constexpr double kSearchRadiusM = 0.5;
-constexpr double kMetresPerRadian = 0.3;  // for ranking by distance, as the tracker's reuse
 }  // namespace
 
 void Relocaliser::allocate(const Params& params) {
@@ -42,8 +41,7 @@ Relocalisation Relocaliser::find(const FramePyramid& frame, const SE3* T_w_last,
       bool chosen = false;
       for (int k = 0; k < n; ++k) chosen |= candidates[k].slot == slot;
       const SE3 d = places->at_slot(slot).T_w_k.inverse() * *T_w_last;
-      const double distance =
-          d.translation().norm() + kMetresPerRadian * so3_log(d.quaternion()).norm();
+      const double distance = ranking_distance_m(d);
       if (!chosen && distance < nearest_distance) nearest = slot, nearest_distance = distance;
     }
     if (nearest < 0) break;

@@ -12,6 +12,7 @@
 #include <string>
 #include <thread>
 
+#include "config_files.hpp"
 #include "rgbdtam/hal/clock.hpp"
 #include "rgbdtam/hal/serial_link.hpp"
 #include "rgbdtam/runtime/mavlink.hpp"

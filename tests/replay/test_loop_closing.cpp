@@ -8,6 +8,7 @@
 
 #include "config_files.hpp"
 #include "frontend_frames.hpp"
+#include "measures.hpp"
 #include "rgbdtam/hal/tum_trajectory.hpp"
 #include "rgbdtam/runtime/loop_closing.hpp"
 #include "rgbdtam/runtime/relocaliser.hpp"
@@ -18,7 +19,7 @@
 namespace rgbdtam {
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
+using testing::kDeg;
 
 int64_t no_clock() { return 0; }
 

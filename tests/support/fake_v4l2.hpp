@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "measures.hpp"
 #include "rgbdtam/core/byte_io.hpp"
 #include "rgbdtam/hal/v4l2_source.hpp"
 
@@ -33,7 +34,6 @@ struct BufferQueue {
 };
 
 inline constexpr int kW = 16, kH = 8;
-inline constexpr int64_t kMs = 1000000;
 
 struct Event {
   enum Kind { kFrame, kEintr, kEagain, kErrorFlag, kUnplug } kind = kFrame;

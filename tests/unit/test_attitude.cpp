@@ -1,3 +1,4 @@
+#include "measures.hpp"
 #include "rgbdtam/core/attitude.hpp"
 
 #include <gtest/gtest.h>
@@ -7,7 +8,7 @@
 namespace rgbdtam {
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
+using testing::kDeg;
 
 Eigen::Quaterniond turn(const Vector3d& axis, double angle_rad) {
   return Eigen::Quaterniond(Eigen::AngleAxisd(angle_rad, axis.normalized()));

@@ -27,8 +27,7 @@ Status load(const std::string& dir, Board* b) {
 }
 
 TEST(Board, ShippedBoardsLoadAndValidate) {
-  for (const char* name :
-       {"host-emulation", "raspberry-pi-4", "raspberry-pi-5", "radxa-rock-5b"}) {
+  for (const char* name : {"host-emulation", "raspberry-pi-4", "raspberry-pi-5", "radxa-rock-5b"}) {
     Board b;
     const Status s = load(testing::source_path(std::string("board/") + name), &b);
     ASSERT_TRUE(s.is_ok()) << s.message();
@@ -110,7 +109,7 @@ TEST(Board, HostEmulationPathsAreRelativeToTheBoardFolder) {
             testing::source_path("board/host-emulation") + "/../../config/tum_fr3.conf");
 }
 
-void expect_error(const std::string& text, const std::string& must_contain) {
+void expect_board_error(const std::string& text, const std::string& must_contain) {
   Board b;
   Status s = parse_board(text.c_str(), "bad.conf", "board/bad", &b);
   if (s.is_ok()) s = validate_board(b);
@@ -118,52 +117,67 @@ void expect_error(const std::string& text, const std::string& must_contain) {
   EXPECT_NE(std::string(s.message()).find(must_contain), std::string::npos) << s.message();
 }
 
-constexpr const char* kMinimal =
+constexpr const char* kMinimalBoard =
     "board.name = bad\nbuild.preset = host-release\nboard.cpu_count = 2\nsensor.kind = replay\n"
     "sensor.device = x\nsensor.config = y\nlink.kind = udp\nlink.udp_remote = 127.0.0.1:14550\n";
 
 TEST(Board, BadBoardsAreClearErrors) {
   Board ok;
-  ASSERT_TRUE(parse_board(kMinimal, "ok.conf", "board/ok", &ok).is_ok());
+  ASSERT_TRUE(parse_board(kMinimalBoard, "ok.conf", "board/ok", &ok).is_ok());
   ASSERT_TRUE(validate_board(ok).is_ok());
-  expect_error("board.name = x\n", "missing required key 'build.preset'");
-  expect_error(testing::with_changes(kMinimal, "sensor.kind = kinect2\n"), "sensor.kind 'kinect2'");
-  expect_error(testing::with_changes(kMinimal, "link.kind = can\n"), "link.kind 'can'");
-  expect_error(testing::with_changes(kMinimal, "link.udp_remote = 127.0.0.1\n"), "link.udp_remote");
-  expect_error(testing::with_changes(kMinimal, "link.udp_remote = 127.0.0.1:70000\n"),
-               "link.udp_remote");
-  expect_error(testing::with_changes(kMinimal, "link.kind = serial\n"), "link.serial_device");
-  expect_error(testing::with_changes(kMinimal, "link.baud = 50\n"), "bad.conf:9: key 'link.baud'");
-  expect_error(testing::with_changes(kMinimal, "threads.mapper_cpu = 2\n"),
-               "threads.mapper_cpu is 2, but the board has 2 CPUs");
-  expect_error(
-      testing::with_changes(kMinimal, "threads.tracker_cpu = 1\nthreads.builder_cpu = 1\n"),
+  expect_board_error("board.name = x\n", "missing required key 'build.preset'");
+  expect_board_error(testing::with_changes(kMinimalBoard, "sensor.kind = kinect2\n"),
+                     "sensor.kind 'kinect2'");
+  expect_board_error(testing::with_changes(kMinimalBoard, "link.kind = can\n"), "link.kind 'can'");
+  expect_board_error(testing::with_changes(kMinimalBoard, "link.udp_remote = 127.0.0.1\n"),
+                     "link.udp_remote");
+  expect_board_error(testing::with_changes(kMinimalBoard, "link.udp_remote = 127.0.0.1:70000\n"),
+                     "link.udp_remote");
+  expect_board_error(testing::with_changes(kMinimalBoard, "link.kind = serial\n"),
+                     "link.serial_device");
+  expect_board_error(testing::with_changes(kMinimalBoard, "link.baud = 50\n"),
+                     "bad.conf:9: key 'link.baud'");
+  expect_board_error(testing::with_changes(kMinimalBoard, "threads.mapper_cpu = 2\n"),
+                     "threads.mapper_cpu is 2, but the board has 2 CPUs");
+  expect_board_error(
+      testing::with_changes(kMinimalBoard, "threads.tracker_cpu = 1\nthreads.builder_cpu = 1\n"),
       "threads.builder_cpu is the tracker's CPU (1)");
-  expect_error(testing::with_changes(kMinimal, "gpio.led_line = 3\n"), "gpio.chip is empty");
-  expect_error(testing::with_changes(kMinimal, "link.T_b_c = 1 0 0\n"), "link.T_b_c");
-  expect_error(testing::with_changes(kMinimal, "link.T_b_c = 2 0 0 0 0 0 0\n"), "link.T_b_c");
-  expect_error(testing::with_changes(kMinimal, "link.T_b_c = nan 0 0 0 0 0 0\n"), "link.T_b_c");
-  expect_error(testing::with_changes(kMinimal, "link.T_b_c = 1 0 0 0 0 inf 0\n"), "link.T_b_c");
-  expect_error(testing::with_changes(kMinimal, "threads.link_priority = 120\n"), "out of range");
-  expect_error(testing::with_changes(kMinimal, "gpio.led_pin = 3\n"), "unknown key 'gpio.led_pin'");
-  expect_error(testing::with_changes(kMinimal, "sensor.usb_id = kinect\n"),
-               "sensor.usb_id 'kinect'");
-  expect_error(testing::with_changes(kMinimal, "sensor.depth = metric\n"), "sensor.depth 'metric'");
-  expect_error(testing::with_changes(kMinimal, "sensor.kind = v4l2\nsensor.device = usb\n"),
-               "sensor.device = usb finds the camera's nodes by its USB id: set sensor.usb_id");
-  expect_error(testing::with_changes(kMinimal, "origin.latitude_deg = 47.4\n"),
-               "origin.latitude_deg and origin.longitude_deg go together");
-  expect_error(testing::with_changes(kMinimal, "origin.latitude_deg = 91\n"), "out of range");
-  expect_error(testing::with_changes(kMinimal, "origin.latitude_deg = nan\n"),
-               "origin.latitude_deg");
-  expect_error(testing::with_changes(kMinimal, "autopilot.attitude_sigma = 0\n"), "out of range");
+  expect_board_error(testing::with_changes(kMinimalBoard, "gpio.led_line = 3\n"),
+                     "gpio.chip is empty");
+  expect_board_error(testing::with_changes(kMinimalBoard, "link.T_b_c = 1 0 0\n"), "link.T_b_c");
+  expect_board_error(testing::with_changes(kMinimalBoard, "link.T_b_c = 2 0 0 0 0 0 0\n"),
+                     "link.T_b_c");
+  expect_board_error(testing::with_changes(kMinimalBoard, "link.T_b_c = nan 0 0 0 0 0 0\n"),
+                     "link.T_b_c");
+  expect_board_error(testing::with_changes(kMinimalBoard, "link.T_b_c = 1 0 0 0 0 inf 0\n"),
+                     "link.T_b_c");
+  expect_board_error(testing::with_changes(kMinimalBoard, "threads.link_priority = 120\n"),
+                     "out of range");
+  expect_board_error(testing::with_changes(kMinimalBoard, "gpio.led_pin = 3\n"),
+                     "unknown key 'gpio.led_pin'");
+  expect_board_error(testing::with_changes(kMinimalBoard, "sensor.usb_id = kinect\n"),
+                     "sensor.usb_id 'kinect'");
+  expect_board_error(testing::with_changes(kMinimalBoard, "sensor.depth = metric\n"),
+                     "sensor.depth 'metric'");
+  expect_board_error(
+      testing::with_changes(kMinimalBoard, "sensor.kind = v4l2\nsensor.device = usb\n"),
+      "sensor.device = usb finds the camera's nodes by its USB id: set sensor.usb_id");
+  expect_board_error(testing::with_changes(kMinimalBoard, "origin.latitude_deg = 47.4\n"),
+                     "origin.latitude_deg and origin.longitude_deg go together");
+  expect_board_error(testing::with_changes(kMinimalBoard, "origin.latitude_deg = 91\n"),
+                     "out of range");
+  expect_board_error(testing::with_changes(kMinimalBoard, "origin.latitude_deg = nan\n"),
+                     "origin.latitude_deg");
+  expect_board_error(testing::with_changes(kMinimalBoard, "autopilot.attitude_sigma = 0\n"),
+                     "out of range");
 }
 
 TEST(Board, CapacityOverridesAreCheckedLikeParams) {
   Board b;
-  ASSERT_TRUE(parse_board((testing::with_changes(kMinimal, "capacity.keyframe_pool = 4\n")).c_str(),
-                          "small.conf", "board/small", &b)
-                  .is_ok());
+  ASSERT_TRUE(
+      parse_board((testing::with_changes(kMinimalBoard, "capacity.keyframe_pool = 4\n")).c_str(),
+                  "small.conf", "board/small", &b)
+          .is_ok());
   Params p;
   const Status s = apply_board_capacity(b, &p);
   ASSERT_FALSE(s.is_ok());
@@ -173,7 +187,7 @@ TEST(Board, CapacityOverridesAreCheckedLikeParams) {
 
 TEST(Board, TheSmallBoardProfileTracksDownTo320x240WithTheBoardsPointBudget) {
   Board b;
-  ASSERT_TRUE(parse_board(testing::with_changes(kMinimal,
+  ASSERT_TRUE(parse_board(testing::with_changes(kMinimalBoard,
                                                 "capacity.finest_tracked_level = 1\n"
                                                 "capacity.photometric_points = 4000\n")
                               .c_str(),
@@ -184,8 +198,8 @@ TEST(Board, TheSmallBoardProfileTracksDownTo320x240WithTheBoardsPointBudget) {
   EXPECT_EQ(p.tracker.max_iterations[0], 0);
   EXPECT_GT(p.tracker.max_iterations[1], 0);
   EXPECT_EQ(p.tracker.photometric_points_finest, 4000);
-  expect_error(testing::with_changes(kMinimal, "capacity.finest_tracked_level = 2\n"),
-               "out of range");
+  expect_board_error(testing::with_changes(kMinimalBoard, "capacity.finest_tracked_level = 2\n"),
+                     "out of range");
 }
 
 TEST(Board, EndpointsSplit) {

@@ -12,12 +12,13 @@ namespace rgbdtam {
 namespace {
 
 const RadTanDistortion kFr1{0.2624, -0.9531, -0.0054, 0.0026, 1.1633};
-const PinholeIntrinsics kK{517.3, 516.5, 318.6, 255.3, 640, 480};
+const PinholeIntrinsics kFr1Intrinsics{517.3, 516.5, 318.6, 255.3, 640, 480};
 
 TEST(Distortion, UndistortInvertsDistortAcrossTheImage) {
   for (double u = 0; u <= 640; u += 40) {
     for (double v = 0; v <= 480; v += 40) {
-      const double x = (u - kK.cx_px) / kK.fx_px, y = (v - kK.cy_px) / kK.fy_px;
+      const double x = (u - kFr1Intrinsics.cx_px) / kFr1Intrinsics.fx_px,
+                   y = (v - kFr1Intrinsics.cy_px) / kFr1Intrinsics.fy_px;
       double xd, yd, xu, yu;
       kFr1.distort(x, y, &xd, &yd);
       kFr1.undistort(xd, yd, &xu, &yu);
@@ -30,7 +31,7 @@ TEST(Distortion, UndistortInvertsDistortAcrossTheImage) {
 TEST(Undistorter, MovesAnImpulseToWhereTheModelSays) {
   // A bright pixel in the raw image must appear at the undistorted position of that pixel.
   Undistorter und;
-  und.init(kK, kFr1);
+  und.init(kFr1Intrinsics, kFr1);
   ASSERT_FALSE(und.is_identity());
   const int rx = 80, ry = 60;  // far from the centre, where distortion is strong
   std::vector<uint8_t> raw(640 * 480, 0);
@@ -40,8 +41,10 @@ TEST(Undistorter, MovesAnImpulseToWhereTheModelSays) {
   out.allocate(640, 480);
   und.undistort_gray(raw.data(), &out);
   double xu, yu;
-  kFr1.undistort((rx - kK.cx_px) / kK.fx_px, (ry - kK.cy_px) / kK.fy_px, &xu, &yu);
-  const double eu = kK.fx_px * xu + kK.cx_px, ev = kK.fy_px * yu + kK.cy_px;
+  kFr1.undistort((rx - kFr1Intrinsics.cx_px) / kFr1Intrinsics.fx_px,
+                 (ry - kFr1Intrinsics.cy_px) / kFr1Intrinsics.fy_px, &xu, &yu);
+  const double eu = kFr1Intrinsics.fx_px * xu + kFr1Intrinsics.cx_px,
+               ev = kFr1Intrinsics.fy_px * yu + kFr1Intrinsics.cy_px;
   double sum = 0, su = 0, sv = 0;
   for (int y = 0; y < 480; ++y)
     for (int x = 0; x < 640; ++x) {
@@ -57,7 +60,7 @@ TEST(Undistorter, MovesAnImpulseToWhereTheModelSays) {
 
 TEST(Undistorter, IdentityWithoutDistortionAndNearestForDepth) {
   Undistorter und;
-  und.init(kK, RadTanDistortion());
+  und.init(kFr1Intrinsics, RadTanDistortion());
   EXPECT_TRUE(und.is_identity());
   std::vector<uint16_t> depth(640 * 480);
   for (size_t i = 0; i < depth.size(); ++i) depth[i] = static_cast<uint16_t>(i % 5000);
@@ -69,7 +72,7 @@ TEST(Undistorter, IdentityWithoutDistortionAndNearestForDepth) {
   for (size_t i = 0; i < depth.size(); i += 997) EXPECT_EQ(out.data()[i], depth[i]);
   // With distortion, every output depth is one of the input values (no interpolation).
   Undistorter d;
-  d.init(kK, kFr1);
+  d.init(kFr1Intrinsics, kFr1);
   std::vector<uint16_t> two(640 * 480);
   for (size_t i = 0; i < two.size(); ++i) two[i] = (i / 640) % 2 ? 1000 : 3000;
   d.undistort_depth(two.data(), as_is.data(), &out);
@@ -82,9 +85,9 @@ TEST(Undistorter, IdentityWithoutDistortionAndNearestForDepth) {
 TEST(Pyramid, IntrinsicsFollowPixelCentres) {
   // A 3-D point projects to level l at (u0 - 0.5(2^l - 1)) / 2^l, the 2x2-average convention.
   FramePyramid p;
-  p.allocate(kK, 5000.0, DepthRange());
+  p.allocate(kFr1Intrinsics, 5000.0, DepthRange());
   const Vector3d X(0.2, -0.1, 1.5);
-  const double u0 = kK.fx_px * X.x() / X.z() + kK.cx_px;
+  const double u0 = kFr1Intrinsics.fx_px * X.x() / X.z() + kFr1Intrinsics.cx_px;
   for (int l = 0; l < kPyramidLevels; ++l) {
     const PinholeIntrinsics& k = p.intrinsics(l);
     const double s = std::pow(2.0, l);

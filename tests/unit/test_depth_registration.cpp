@@ -7,6 +7,7 @@
 #include <cmath>
 #include <vector>
 
+#include "measures.hpp"
 #include "rgbdtam/core/depth_registration.hpp"
 
 namespace rgbdtam {
@@ -120,9 +121,7 @@ Comparison register_and_compare(const CameraModel& depth_camera, const CameraMod
                  seen_by_depth_camera(exact, colour, measured, depth_camera, T_c_d));
 }
 
-double percentile(const std::vector<double>& sorted, double p) {
-  return sorted[static_cast<size_t>(p * static_cast<double>(sorted.size() - 1))];
-}
+using testing::percentile;
 
 class Registration : public ::testing::Test {
  protected:

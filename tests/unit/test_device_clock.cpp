@@ -5,12 +5,13 @@
 #include <cstdint>
 #include <random>
 
+#include "measures.hpp"
 #include "rgbdtam/core/device_clock.hpp"
 
 namespace rgbdtam {
 namespace {
 
-constexpr int64_t kMs = 1000000;
+using testing::kMs;
 
 TEST(DeviceClock, ArrivalJitterIsRemovedOnceOneFrameCameWithoutWaiting) {
   DeviceClock clock;

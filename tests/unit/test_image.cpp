@@ -11,11 +11,11 @@
 namespace rgbdtam {
 namespace {
 
-const PinholeIntrinsics kK{500, 500, 319.5, 239.5, 640, 480};
+const PinholeIntrinsics kImageCamera{500, 500, 319.5, 239.5, 640, 480};
 
 TEST(Pyramid, GrayLevelsAreTwoByTwoAverages) {
   FramePyramid p;
-  p.allocate(kK, 5000.0, DepthRange());
+  p.allocate(kImageCamera, 5000.0, DepthRange());
   ImageF& g = p.gray(0);
   for (int y = 0; y < 480; ++y)
     for (int x = 0; x < 640; ++x) g.at(x, y) = static_cast<float>((x * 7 + y * 13) % 256) / 255.f;
@@ -34,7 +34,7 @@ TEST(Pyramid, GrayLevelsAreTwoByTwoAverages) {
 
 TEST(Pyramid, InverseDepthRangeAndEdges) {
   FramePyramid p;
-  p.allocate(kK, 5000.0, DepthRange{0.3, 5.0});
+  p.allocate(kImageCamera, 5000.0, DepthRange{0.3, 5.0});
   ImageU16 depth;
   depth.allocate(640, 480);
   // Left half at 1 m, right half at 2 m, a strip of no measurement, a strip too far.
@@ -69,7 +69,7 @@ TEST(Pyramid, InverseDepthRangeAndEdges) {
 // within 20 % of each other put many blocks on both sides of the 0.9.
 TEST(Pyramid, InverseDepthBlocksFollowTheAgreementRule) {
   FramePyramid p;
-  p.allocate(kK, 5000.0, DepthRange{0.3, 5.0});
+  p.allocate(kImageCamera, 5000.0, DepthRange{0.3, 5.0});
   ImageU16 depth;
   depth.allocate(640, 480);
   uint32_t state = 7;

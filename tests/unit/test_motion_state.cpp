@@ -2,13 +2,14 @@
 // loss is counted.
 #include <gtest/gtest.h>
 
+#include "measures.hpp"
 #include "rgbdtam/port/messages.hpp"
 #include "rgbdtam/runtime/tracking/motion_state.hpp"
 
 namespace rgbdtam {
 namespace {
 
-constexpr int64_t kMs = 1'000'000;
+using testing::kMs;
 constexpr int64_t kWindowNs = 500 * kMs;  // health.reset_after_lost_ms
 
 MotionState tracked_until(int64_t t_ns) {

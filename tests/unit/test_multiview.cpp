@@ -6,6 +6,7 @@
 #include <cmath>
 #include <vector>
 
+#include "measures.hpp"
 #include "rgbdtam/core/canny.hpp"
 #include "rgbdtam/core/multiview.hpp"
 #include "rgbdtam/core/tracker.hpp"
@@ -75,11 +76,7 @@ Mapped map_keyframe(int frames) {
   return m;
 }
 
-double percentile(std::vector<double> v, double q) {
-  const size_t i = static_cast<size_t>(q * static_cast<double>(v.size() - 1));
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(i), v.end());
-  return v[i];
-}
+using testing::percentile;
 
 // The scan clips each epipolar segment to the part of the image a whole patch fits in; the
 // camera glides right and up, so the keyframe's pixels near the borders leave the later frames

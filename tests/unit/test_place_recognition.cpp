@@ -5,6 +5,7 @@
 #include <cstring>
 #include <vector>
 
+#include "measures.hpp"
 #include "rgbdtam/core/features.hpp"
 #include "rgbdtam/core/place_database.hpp"
 #include "rgbdtam/core/pose_graph.hpp"
@@ -16,15 +17,16 @@
 namespace rgbdtam {
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
+using testing::expect_close;
+using testing::kDeg;
 
 // A rendered view of the synthetic room as the tracker's frontend would hold it.
-struct View {
+struct FeatureView {
   FramePyramid frame;
   FixedVector<Feature> features;
 };
 
-void render_view(const SE3& T_w_c, View* v, int max_features = 400) {
+void render_view(const SE3& T_w_c, FeatureView* v, int max_features = 400) {
   static const testing::SyntheticScene scene;
   const testing::SyntheticFrame f = scene.render(T_w_c);
   v->frame.allocate(scene.camera, scene.depth_factor, DepthRange{0.3, 10.0});
@@ -47,7 +49,7 @@ void render_view(const SE3& T_w_c, View* v, int max_features = 400) {
 SE3 start_pose() { return testing::SyntheticScene::pose_at(0.0); }
 
 // T_b_a from a's view to b's, estimated by matching their features.
-RigidRansacResult align(const View& a, const View& b, int* matches) {
+RigidRansacResult align(const FeatureView& a, const FeatureView& b, int* matches) {
   std::vector<PointPair> pairs(static_cast<size_t>(a.features.size()));
   *matches = match_features(a.features, b.features, pairs.data(), a.features.size());
   std::vector<uint8_t> inlier(pairs.size());
@@ -55,14 +57,8 @@ RigidRansacResult align(const View& a, const View& b, int* matches) {
   return rigid_ransac(pairs.data(), *matches, opt, inlier.data());
 }
 
-void expect_close(const SE3& estimate, const SE3& truth, double metres, double radians) {
-  const SE3 d = truth.inverse() * estimate;
-  EXPECT_LT(d.translation().norm(), metres);
-  EXPECT_LT(so3_log(d.quaternion()).norm(), radians);
-}
-
 TEST(Features, CornersWithDepthSpreadOverTheView) {
-  View v;
+  FeatureView v;
   render_view(start_pose(), &v);
   ASSERT_GE(v.features.size(), 200);
   int cells[4] = {};  // image quadrants
@@ -74,7 +70,7 @@ TEST(Features, CornersWithDepthSpreadOverTheView) {
 }
 
 TEST(Features, TheSameViewGivesTheSameFeatures) {
-  View a, b;
+  FeatureView a, b;
   render_view(start_pose(), &a);
   render_view(start_pose(), &b);
   ASSERT_EQ(a.features.size(), b.features.size());
@@ -88,7 +84,7 @@ TEST(Features, TheSameViewGivesTheSameFeatures) {
 void expect_views_align(const SE3& motion, int min_inliers) {
   const SE3 T_w_a = start_pose();
   const SE3 T_w_b = T_w_a * motion;
-  View a, b;
+  FeatureView a, b;
   render_view(T_w_a, &a);
   render_view(T_w_b, &b);
   int matches = 0;
@@ -109,7 +105,7 @@ TEST(Features, AThirtyDegreeRollStillMatches) {
 std::vector<std::vector<Descriptor>> training_images() {
   std::vector<std::vector<Descriptor>> images;
   for (int i = 0; i < 4; ++i) {
-    View v;
+    FeatureView v;
     render_view(start_pose() * SE3(so3_exp(Vector3d(0, 0.1 * i, 0)), Vector3d(0.1 * i, 0, 0)), &v);
     std::vector<Descriptor> d;
     for (const Feature& f : v.features) d.push_back(f.descriptor);
@@ -170,7 +166,7 @@ TEST(Vocabulary, DamagedFilesAreRefusedWithTheReason) {
 TEST(Vocabulary, BagOfWordsIsNormalisedAndScoresItselfOne) {
   const auto images = training_images();
   const Vocabulary voc = Vocabulary::train(images, 5, 3);
-  View v;
+  FeatureView v;
   render_view(start_pose(), &v);
   BowVector bow;
   bow.reserve_once(v.features.size());

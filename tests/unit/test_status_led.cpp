@@ -3,13 +3,14 @@
 
 #include <string>
 
+#include "measures.hpp"
 #include "rgbdtam/hal/gpio.hpp"
 #include "rgbdtam/runtime/status_led.hpp"
 
 namespace rgbdtam {
 namespace {
 
-constexpr int64_t kMs = 1000000;
+using testing::kMs;
 
 // The fraction of one second the LED is on, sampled every millisecond.
 double duty(LedState s) {

@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "measures.hpp"
 #include "rgbdtam/core/pose_graph.hpp"
 #include "rgbdtam/core/view_alignment.hpp"
 #include "synthetic_scene.hpp"
@@ -11,7 +12,8 @@
 namespace rgbdtam {
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
+using testing::expect_close;
+using testing::kDeg;
 
 // Views of a synthetic scene, as a tracker's frame pyramid gives them.
 class Views {
@@ -54,12 +56,6 @@ struct Aligner {
   }
   ViewAligner aligner;
 };
-
-void expect_close(const SE3& estimate, const SE3& truth, double metres, double radians) {
-  const SE3 d = truth.inverse() * estimate;
-  EXPECT_LT(d.translation().norm(), metres);
-  EXPECT_LT(so3_log(d.quaternion()).norm(), radians);
-}
 
 TEST(View, IsTheFramesViewLevelQuantised) {
   const testing::SyntheticScene scene;

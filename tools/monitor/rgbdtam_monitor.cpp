@@ -13,6 +13,7 @@
 #include <mutex>
 #include <thread>
 
+#include "config_files.hpp"
 #include "monitor_http.hpp"
 #include "monitor_state.hpp"
 #include "rgbdtam/hal/clock.hpp"

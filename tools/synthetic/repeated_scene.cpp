@@ -25,7 +25,7 @@ struct Box {
   double stripe_m = 0.0;  // horizontal stripes of this height (a shirt), 0: plain
 };
 
-struct Hit {
+struct GreyHit {
   double t = kInf;  // along a ray whose direction has unit camera z: the camera depth
   double grey = 0.0;
 };
@@ -74,8 +74,8 @@ class Renderer {
   }
 
   // The nearest surface along the ray, and its grey under the room's light.
-  Hit cast(const Vector3d& o, const Vector3d& d, double t_s) const {
-    Hit h;
+  GreyHit cast(const Vector3d& o, const Vector3d& d, double t_s) const {
+    GreyHit h;
     if (d.z() > 1e-9) consider(&h, (D_ - o.z()) / d.z(), wall_grey(o + (D_ - o.z()) / d.z() * d));
     if (d.y() > 1e-9) {
       const double t = (H_ - o.y()) / d.y();
@@ -98,13 +98,14 @@ class Renderer {
   }
 
  private:
-  void consider(Hit* h, double t, double grey) const {
+  void consider(GreyHit* h, double t, double grey) const {
     if (t > 1e-6 && t < h->t) {
       h->t = t;
       h->grey = grey;
     }
   }
-  void consider_box(Hit* h, const Box& b, const Vector3d& o, const Vector3d& d, double grey) const {
+  void consider_box(GreyHit* h, const Box& b, const Vector3d& o, const Vector3d& d,
+                    double grey) const {
     double t;
     if (!enters(b, o, d, &t) || t >= h->t) return;
     if (b.stripe_m > 0.0) {
@@ -157,7 +158,7 @@ class Renderer {
   }
 
   // Uprights every period and a board every 0.35 m, 0.3 m deep from the wall.
-  void shelving(Hit* h, const Vector3d& o, const Vector3d& d) const {
+  void shelving(GreyHit* h, const Vector3d& o, const Vector3d& d) const {
     constexpr double kDepthM = 0.3, kBoardEveryM = 0.35, kThickM = 0.02, kUprightM = 0.03;
     const double z0 = D_ - kDepthM;
     if (d.z() <= 1e-9) return;

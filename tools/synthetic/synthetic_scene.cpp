@@ -7,7 +7,7 @@
 
 namespace rgbdtam::testing {
 namespace {
-struct Hit {
+struct PlaneHit {
   double t = 1e30;  // ray parameter (camera z for unit-z rays)
   double u = 0, v = 0;
 };

@@ -60,4 +60,11 @@ inline bool within(const SE3& d, double max_m, double max_rad) {
   return d.translation().norm() <= max_m && so3_log(d.quaternion()).norm() <= max_rad;
 }
 
+// One number for how far apart two poses are (d maps one to the other), to rank keyframes by:
+// a radian of turn counts as 0.3 m of travel.
+inline double ranking_distance_m(const SE3& d) {
+  constexpr double kMetresPerRadian = 0.3;
+  return d.translation().norm() + kMetresPerRadian * so3_log(d.quaternion()).norm();
+}
+
 }  // namespace rgbdtam

@@ -224,10 +224,8 @@ bool KeyframeHandover::pose_of(uint32_t id, SE3* T_w_k) const {
 }
 
 int KeyframeHandover::nearest(const SE3& T_w_c, int wanted, Keyframe** out) {
-  constexpr double kMetresPerRadian = 0.3;
   auto distance = [&](const Keyframe& kf) {
-    const SE3 d = kf.T_w_k.inverse() * T_w_c;
-    return d.translation().norm() + kMetresPerRadian * so3_log(d.quaternion()).norm();
+    return ranking_distance_m(kf.T_w_k.inverse() * T_w_c);
   };
   int count = 0;
   while (count < wanted) {
