@@ -108,6 +108,17 @@ Status V4l2Stream::open_as(uint32_t type, V4l2Io* io, const char* path, uint32_t
                          "%s: format %s %dx%d refused; the device offers %s %ux%u", path, want,
                          width, height, got, fmt.fmt.pix.width, fmt.fmt.pix.height);
   }
+  if (!metadata) {
+    // Packed formats' rows are width x 2 bytes, or padded beyond; 0 (compressed MJPEG): unused.
+    const uint32_t packed = static_cast<uint32_t>(width) * 2;
+    const uint32_t line = fmt.fmt.pix.bytesperline;
+    if (fourcc != V4L2_PIX_FMT_MJPEG && line != 0 && line < packed) {
+      return Status::error(StatusCode::kInvalidArgument,
+                           "%s: rows of %u bytes are shorter than %d pixels of %s", path, line,
+                           width, want);
+    }
+    bytes_per_line_ = line != 0 ? line : packed;
+  }
   v4l2_requestbuffers req{};
   req.count = kBuffers;
   req.type = type;
@@ -382,7 +393,6 @@ V4l2Source::Stamped V4l2Source::stamp(V4l2Stream* stream, V4l2MetadataReader* re
 
 Status V4l2Source::next(SensorFrame* frame, Status* warning) {
   *warning = Status::ok();
-  const size_t pixels = size_.pixels(), depth_pixels = size_.depth_pixels();
   int d = -1, c = -1;
   int64_t arrival_d = 0, arrival_c = 0;
   Stamped sd, sc;
@@ -417,18 +427,22 @@ Status V4l2Source::next(SensorFrame* frame, Status* warning) {
     }
   }
   const bool mjpeg = colour_format_ == V4l2Colour::kMjpeg;
-  if (s.is_ok() &&
-      (depth_.bytes_used(d) < depth_pixels * 2 || (!mjpeg && colour_.bytes_used(c) < pixels * 2))) {
+  const int w = size_.width_px, h = size_.height_px;
+  const int depth_w = size_.depth_width_px, depth_h = size_.depth_height_px;
+  const size_t depth_row_bytes = static_cast<size_t>(depth_w) * 2;
+  if (s.is_ok() && (!depth_.holds(d, depth_h, depth_row_bytes) ||
+                    (!mjpeg && !colour_.holds(c, h, static_cast<size_t>(w) * 2)))) {
     s = Status::error(StatusCode::kCorrupt, "short frame (%zu depth, %zu colour bytes)",
                       depth_.bytes_used(d), colour_.bytes_used(c));
   }
   if (s.is_ok() && mjpeg) s = jpeg_.decode(colour_.data(c), colour_.bytes_used(c), gray_.data());
   if (s.is_ok()) {
-    std::memcpy(depth_img_.data(), depth_.data(d), depth_pixels * 2);
-    if (!mjpeg) {
-      const uint8_t* yuyv = colour_.data(c);
-      uint8_t* gray = gray_.data();
-      for (size_t i = 0; i < pixels; ++i) gray[i] = yuyv[2 * i];  // Y of Y0 U Y1 V
+    for (int y = 0; y < depth_h; ++y)
+      std::memcpy(depth_img_.row(y), depth_.row(d, y), depth_row_bytes);
+    for (int y = 0; y < h && !mjpeg; ++y) {
+      const uint8_t* yuyv = colour_.row(c, y);
+      uint8_t* gray = gray_.row(y);
+      for (int x = 0; x < w; ++x) gray[x] = yuyv[2 * x];  // Y of Y0 U Y1 V
     }
   }
   // Buffers go back to the driver whatever happened.

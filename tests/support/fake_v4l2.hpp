@@ -7,6 +7,7 @@
 #include <linux/videodev2.h>
 #include <sys/mman.h>
 
+#include <algorithm>
 #include <cstring>
 #include <deque>
 #include <string>
@@ -64,6 +65,7 @@ class FakeV4l2 : public V4l2Io {
     uint32_t meta_format = V4L2_META_FMT_UVC;  // a metadata node's format (UVCH or D4XX)
     uint32_t frames = 0;                       // frames delivered (their sequence numbers)
     int width = kW, height = kH;               // the one size it streams at
+    int row_padding_bytes = 0;                 // after each row of pixels (bytesperline)
   };
   static constexpr size_t kMjpegBufferBytes = 1 << 16;
   std::vector<Node> nodes;
@@ -89,13 +91,17 @@ class FakeV4l2 : public V4l2Io {
                      V4L2_META_FMT_UVC,
                      0,
                      kW,
-                     kH});
+                     kH,
+                     0});
     return nodes.back();
+  }
+  static size_t bytes_per_line(const Node& n) {
+    return static_cast<size_t>(n.width * 2 + n.row_padding_bytes);
   }
   static size_t buffer_bytes(const Node& n) {
     if (n.metadata) return kMetadataBufferBytes;
     return n.fourcc == V4L2_PIX_FMT_MJPEG ? kMjpegBufferBytes
-                                          : static_cast<size_t>(n.width * n.height * 2);
+                                          : bytes_per_line(n) * static_cast<size_t>(n.height);
   }
   static constexpr size_t kMetadataBufferBytes = 1024;
   Node* node(int fd) {
@@ -151,6 +157,8 @@ class FakeV4l2 : public V4l2Io {
         f->fmt.pix.pixelformat = n->fourcc;  // the nearest it has
         f->fmt.pix.width = static_cast<uint32_t>(n->width);
         f->fmt.pix.height = static_cast<uint32_t>(n->height);
+        f->fmt.pix.bytesperline =
+            n->fourcc == V4L2_PIX_FMT_MJPEG ? 0 : static_cast<uint32_t>(bytes_per_line(*n));
         return 0;
       }
       case VIDIOC_REQBUFS: {
@@ -193,8 +201,7 @@ class FakeV4l2 : public V4l2Io {
         b->index = static_cast<uint32_t>(n->queued.front());
         n->queued.pop_front();
         std::vector<uint8_t>& mem = n->buffers[b->index];
-        const int pixels = n->width * n->height;
-        b->bytesused = static_cast<uint32_t>(pixels * 2);
+        b->bytesused = static_cast<uint32_t>(buffer_bytes(*n));
         b->sequence = e.sequence >= 0 ? static_cast<uint32_t>(e.sequence) : n->frames;
         ++n->frames;
         if (n->metadata) {
@@ -203,15 +210,18 @@ class FakeV4l2 : public V4l2Io {
           const std::vector<uint8_t>& jpeg = n->jpeg[e.fill % n->jpeg.size()];
           std::memcpy(mem.data(), jpeg.data(), jpeg.size());
           b->bytesused = static_cast<uint32_t>(jpeg.size());
-        } else if (n->fourcc == V4L2_PIX_FMT_Z16) {
-          for (int i = 0; i < pixels; ++i) {
-            const uint16_t v = static_cast<uint16_t>(e.fill * 100 + i);
-            std::memcpy(&mem[2 * i], &v, 2);
-          }
         } else {
-          for (int i = 0; i < pixels; ++i) {
-            mem[2 * i] = static_cast<uint8_t>(e.fill + i % 2);  // Y
-            mem[2 * i + 1] = 128;                               // U or V
+          std::fill(mem.begin(), mem.end(), uint8_t{0xee});  // what padding holds: not pixels
+          for (int i = 0; i < n->width * n->height; ++i) {
+            uint8_t* p = &mem[bytes_per_line(*n) * static_cast<size_t>(i / n->width) +
+                              2 * static_cast<size_t>(i % n->width)];
+            if (n->fourcc == V4L2_PIX_FMT_Z16) {
+              const uint16_t v = static_cast<uint16_t>(e.fill * 100 + i);
+              std::memcpy(p, &v, 2);
+            } else {
+              p[0] = static_cast<uint8_t>(e.fill + i % 2);  // Y
+              p[1] = 128;                                   // U or V
+            }
           }
         }
         b->flags = e.kind == Event::kErrorFlag ? V4L2_BUF_FLAG_ERROR : 0;

@@ -249,6 +249,42 @@ TEST(V4l2, ADepthCameraOfItsOwnSizeIsStreamedAtItAndAnotherSizeNamesWhatItOffers
   EXPECT_EQ(f.gray[kW * kH - 1], 51);
 }
 
+// V4L2 lets a driver pad each row (bytesperline beyond the pixels' bytes); uvcvideo packs them,
+// other drivers may not. Rows are read where the driver says they start, the padding never.
+TEST(V4l2, RowsThatTheDriverPadsAreReadRowByRow) {
+  Rig rig;
+  rig.depth->row_padding_bytes = 12;
+  rig.colour->row_padding_bytes = 6;
+  ASSERT_TRUE(rig.open().is_ok());
+  rig.depth->script.push_back(frame(1000, 3));
+  rig.colour->script.push_back(frame(1001, 50));
+  SensorFrame f;
+  Status warning;
+  ASSERT_TRUE(rig.source.next(&f, &warning).is_ok());
+  for (int i = 0; i < kW * kH; ++i) {
+    ASSERT_EQ(f.depth[i], 3 * 100 + i) << "depth pixel " << i;
+    ASSERT_EQ(f.gray[i], 50 + i % 2) << "colour pixel " << i;
+  }
+}
+
+TEST(V4l2, RowsShorterThanTheirPixelsAreRefused) {
+  struct ShortRows : FakeV4l2 {
+    int ioctl(int fd, unsigned long request, void* arg) override {
+      const int r = FakeV4l2::ioctl(fd, request, arg);
+      if (request == VIDIOC_S_FMT) static_cast<v4l2_format*>(arg)->fmt.pix.bytesperline = kW;
+      return r;
+    }
+  } io;
+  io.add("/dev/video0", V4L2_PIX_FMT_Z16);
+  io.add("/dev/video1", V4L2_PIX_FMT_YUYV);
+  V4l2Source source;
+  const Status s = source.open(&io, "/dev/video0", "/dev/video1", same_size(kW, kH), 10 * kMs, 500);
+  ASSERT_FALSE(s.is_ok());
+  EXPECT_NE(std::string(s.message()).find("rows of 16 bytes are shorter than 16 pixels of Z16"),
+            std::string::npos)
+      << s.message();
+}
+
 // A D435 on a Raspberry Pi 4: its depth moved into colour on the sensor's own thread.
 TEST(V4l2, RegistrationOnTheSensorsThreadGivesTheTrackerWhatItWouldHaveMadeAndEveryError) {
   constexpr int kDepthW = 24, kDepthH = 12;

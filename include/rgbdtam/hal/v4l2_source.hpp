@@ -71,6 +71,15 @@ class V4l2Stream {
     return static_cast<const uint8_t*>(buffers_[index].start);
   }
   size_t bytes_used(int index) const { return buffers_[index].used; }
+  // Row y of a filled buffer: a driver may pad rows (bytesperline beyond the pixels' bytes).
+  const uint8_t* row(int index, int y) const {
+    return data(index) + static_cast<size_t>(y) * bytes_per_line_;
+  }
+  // Whether the buffer holds `rows` rows of `row_bytes` each.
+  bool holds(int index, int rows, size_t row_bytes) const {
+    return rows > 0 &&
+           bytes_used(index) >= static_cast<size_t>(rows - 1) * bytes_per_line_ + row_bytes;
+  }
   void close();
 
  private:
@@ -88,6 +97,7 @@ class V4l2Stream {
   V4l2Io* io_ = nullptr;
   uint32_t type_ = 0;  // V4L2_BUF_TYPE_VIDEO_CAPTURE or V4L2_BUF_TYPE_META_CAPTURE
   int fd_ = -1;
+  size_t bytes_per_line_ = 0;  // of a video node's buffers
   char path_[128] = {};
   Status queue(int index);
   Status requeue_owed(V4l2Counters* counters);
