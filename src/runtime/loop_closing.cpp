@@ -338,10 +338,9 @@ int LoopModule::choose_candidates(int query_slot, PlaceCandidate* out) {
     const int slot = store_->handle(i).slot;
     // A place the graph does not join (before a restart, which began at the last valid pose,
     // so the map's guess still holds roughly) is the longest loop of all.
-    const Ranked r{slot, hops_[slot] < 0 ? store_->capacity() : hops_[slot],
-                   ranking_distance_m(T_q_w * store_->at_slot(slot).T_w_k)};
-    if (r.hops < 2) continue;  // itself and its neighbours
     const SE3 d = T_q_w * store_->at_slot(slot).T_w_k;
+    const Ranked r{slot, hops_[slot] < 0 ? store_->capacity() : hops_[slot], ranking_distance_m(d)};
+    if (r.hops < 2) continue;  // itself and its neighbours
     if (!within(d, kNearM, kNearRad)) continue;
     if (r.hops <= kCovisibleHops) {
       if (covisible.slot < 0 || r.distance < covisible.distance) covisible = r;

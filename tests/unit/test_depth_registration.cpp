@@ -3,7 +3,6 @@
 // focal length, lens distortion and a small rotation.
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -103,7 +102,6 @@ Comparison compare(const std::vector<uint16_t>& registered, const std::vector<ui
     c.errors_m.push_back(error);
     c.wrong_surface += error > 0.5 ? 1 : 0;  // the plate where the wall is, or the reverse
   }
-  std::sort(c.errors_m.begin(), c.errors_m.end());
   return c;
 }
 
