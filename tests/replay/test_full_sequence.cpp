@@ -39,30 +39,23 @@ TEST(FullSequence, Fr1XyzAllFramesAteWithinOnePointFiveCentimetres) {
 
 // The mapping issue: the fused multi-view map must not cost accuracy. One run against one is
 // a coin toss (a change that should not matter, such as a Canny threshold 0.5 higher, moves
-// either by up to 0.07 cm), so six runs each are compared by their means, within 0.03 cm (with
-// three, the spread of the means' difference was about the tolerance itself).
-// Where the map matters, beyond the sensor's range, the synthetic far-wall test shows it.
-TEST(FullSequence, Fr1XyzMappingIsNoWorseThanTrackingAloneAndWithinOnePointTwoCentimetres) {
+// either by up to 0.07 cm), so this pair may differ by that much; tools/mapping_vs_tracking.sh
+// compares the means of six such pairs, within 0.03 cm. Where the map matters, beyond the
+// sensor's range, the synthetic far-wall test shows it.
+TEST(FullSequence,
+     Fr1XyzMappingIsWithinOneRunsSpreadOfTrackingAloneAndWithinOnePointTwoCentimetres) {
   const std::string seq = testing::full_fr1_xyz();
   if (seq.empty()) GTEST_SKIP() << "full fr1_xyz not present on this machine";
   const std::string config = testing::source_path("config/tum_fr1.conf");
-  double mean_mapped = 0, mean_alone = 0;
-  constexpr int kVariants = 6;
-  for (const char* variant :
-       {"tracker.canny_low=20", "tracker.canny_low=20.5", "tracker.photometric_points=8980",
-        "tracker.canny_high=60.5", "tracker.photometric_points=9000", "tracker.robust_c=2.001"}) {
-    const auto mapped = testing::replay_and_evaluate(seq, config, {"map.enabled=true", variant});
-    const auto alone = testing::replay_and_evaluate(seq, config, {"map.enabled=false", variant});
-    ASSERT_TRUE(mapped.ran && alone.ran);
-    ASSERT_TRUE(mapped.report.ate_ok && alone.report.ate_ok);
-    EXPECT_EQ(mapped.counters.lost, 0u);
-    EXPECT_LE(mapped.report.ate.rmse_m, 0.012) << variant;
-    mean_mapped += mapped.report.ate.rmse_m / kVariants;
-    mean_alone += alone.report.ate.rmse_m / kVariants;
-    std::printf("%s: all-frames ATE %.3f cm with mapping, %.3f cm without\n", variant,
-                mapped.report.ate.rmse_m * 100, alone.report.ate.rmse_m * 100);
-  }
-  EXPECT_LE(mean_mapped, mean_alone + 0.0003);
+  const auto mapped = testing::replay_and_evaluate(seq, config, {"map.enabled=true"});
+  const auto alone = testing::replay_and_evaluate(seq, config, {"map.enabled=false"});
+  ASSERT_TRUE(mapped.ran && alone.ran);
+  ASSERT_TRUE(mapped.report.ate_ok && alone.report.ate_ok);
+  EXPECT_EQ(mapped.counters.lost, 0u);
+  EXPECT_LE(mapped.report.ate.rmse_m, 0.012);
+  EXPECT_LE(mapped.report.ate.rmse_m, alone.report.ate.rmse_m + 0.0007);
+  std::printf("all-frames ATE %.3f cm with mapping, %.3f cm without\n",
+              mapped.report.ate.rmse_m * 100, alone.report.ate.rmse_m * 100);
 }
 
 // The robust-tracking issue's development sequence: hand-held, fast, around a teddy bear.
