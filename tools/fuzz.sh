@@ -19,22 +19,27 @@ mkdir -p "$out"
 flags=(-std=c++17 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all -Iinclude
        -isystem /usr/include/eigen3)
 
-# Each folder's sources are compiled as one unit (as the CMake build's unity batches: Eigen's
-# templates instantiated once), shared by the targets of one run (the core is compiled once),
-# never across runs.
+# Each folder's sources are compiled as units of up to eight files (as the CMake build's unity
+# batches: Eigen's templates instantiated once per unit, and the units of a target compiled side
+# by side), shared by the targets of one run, never across runs.
 rm -rf "$out/obj"
 mkdir -p "$out/obj"
 build() {  # name, sources... (the units not yet compiled, in parallel, then linked)
-  local name=$1 objects=() missing=() dir files unit
+  local name=$1 objects=() missing=() dir files part unit chunks i j
   shift
   for dir in $(printf '%s\n' "$@" | xargs -n1 dirname | sort -u); do
     files=()
     for src in "$@"; do [ "$(dirname "$src")" != "$dir" ] || files+=("$PWD/$src"); done
-    unit="$out/obj/$(echo "$dir" | tr / _)_$(printf '%s\n' "${files[@]}" | md5sum | cut -c1-12)"
-    objects+=("$unit.o")
-    [ -f "$unit.o" ] && continue
-    printf '#include "%s"\n' "${files[@]}" >"$unit.cpp"
-    missing+=("$unit")
+    chunks=$(((${#files[@]} + 7) / 8))
+    for ((i = 0; i < chunks; i++)); do
+      part=()
+      for ((j = i; j < ${#files[@]}; j += chunks)); do part+=("${files[j]}"); done
+      unit="$out/obj/$(echo "$dir" | tr / _)_$(printf '%s\n' "${part[@]}" | md5sum | cut -c1-12)"
+      objects+=("$unit.o")
+      [ -f "$unit.o" ] && continue
+      printf '#include "%s"\n' "${part[@]}" >"$unit.cpp"
+      missing+=("$unit")
+    done
   done
   [ ${#missing[@]} -eq 0 ] || printf '%s\n' "${missing[@]}" | xargs -P "$(nproc)" -I{} sh -c \
     'clang++ "$@" -c {}.cpp -o {}.o' _ "${flags[@]}"
@@ -64,12 +69,14 @@ for t in "${targets[@]}"; do
     mavlink_decoder) build "$t" src/runtime/mavlink.cpp tests/fuzz/fuzz_mavlink_decoder.cpp ;;
     png_decoder) build "$t" src/hal/png_decoder.cpp tests/fuzz/fuzz_png_decoder.cpp ;;
     text_formats)
-      build "$t" src/core/*.cpp src/hal/tum_replay_source.cpp src/hal/tum_trajectory.cpp \
+      build "$t" src/core/assert.cpp src/core/residuals.cpp src/hal/tum_replay_source.cpp src/hal/tum_trajectory.cpp \
         src/hal/tum_timestamp.cpp src/hal/file.cpp src/hal/clock.cpp src/hal/png_decoder.cpp \
         src/runtime/board.cpp src/runtime/params.cpp src/runtime/key_value.cpp \
         tests/fuzz/fuzz_text_formats.cpp ;;
     map_file)
-      build "$t" src/core/*.cpp src/runtime/map_file.cpp src/runtime/place_recognition.cpp \
+      build "$t" src/core/{assert,camera,canny,features,keyframe_builder,place_database}.cpp \
+        src/core/{pose_graph,pyramid,residuals,rigid_alignment,se3,tracker,tracking_health}.cpp \
+        src/core/{view_alignment,vocabulary}.cpp src/runtime/map_file.cpp src/runtime/place_recognition.cpp \
         src/runtime/loop_closing.cpp src/runtime/map_checkpoint.cpp src/runtime/params.cpp \
         src/runtime/key_value.cpp src/port/latency_stats.cpp tests/fuzz/fuzz_map_file.cpp ;;
     *) echo "unknown fuzz target $t" >&2; exit 2 ;;
