@@ -4,7 +4,7 @@ the board, with results collected as ctest would.
 
   tools/hil/run.py <board> <address> [--attached sensor,gpio-loopback,...] [-j N]
                    [--exclude-label long] [--only REGEX] [--skip REGEX] [--remote-prefix CMD]
-                   [--binary NAME]... [--ssh-config FILE]
+                   [--binary NAME]... [--ssh-config FILE] [--batch N]
 
 <board> is a folder name under board/; its build.preset names the build (build/<preset>).
 <address> is where the board is:
@@ -13,7 +13,8 @@ the board, with results collected as ctest would.
   qemu:              the stand-in transport: the same steps on this machine, each binary run
                      under qemu-aarch64 (no board needed).
 --remote-prefix runs every binary on the far side through a command (the loopback stand-in's
-sshd runs on this x86-64 machine: --remote-prefix qemu-aarch64).
+sshd runs on this x86-64 machine: --remote-prefix qemu-aarch64). --batch N: at most N tests of
+a binary share a process (default 16; 1 runs each in its own, as ctest does).
 
 board/<board>/hil.manifest says which tests need which hardware and what a pass means; a test
 whose hardware is not --attached is not run and is reported skipped, by name. Exit status 0
@@ -162,6 +163,15 @@ class Ssh:
         shutil.rmtree(self.control_dir, ignore_errors=True)
 
 
+def output_of(test, output):
+    """One test's part of a batch's output (GoogleTest's RUN to OK or FAILED lines)."""
+    begin = output.find(f"[ RUN      ] {test}\n")
+    if begin < 0:
+        return output
+    end = output.find("\n[ RUN      ] ", begin + 1)
+    return output[begin:] if end < 0 else output[begin:end + 1]
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("board")
@@ -175,6 +185,8 @@ def main():
     parser.add_argument("--remote-prefix", default="", help="command that runs each binary there")
     parser.add_argument("--ssh-config", default="", help="an ssh_config file for ssh and scp")
     parser.add_argument("-j", type=int, default=os.cpu_count() or 2)
+    parser.add_argument("--batch", type=int, default=16,
+                        help="most tests of one binary run in one process (1: ctest's way)")
     parser.add_argument("--timeout", type=int, default=900, help="seconds per test")
     parser.add_argument("--results", default="", help="folder for the JUnit XML (default in the build)")
     args = parser.parse_args()
@@ -185,10 +197,12 @@ def main():
     listing = os.path.join(build, "hil-tests.txt")
     if not os.path.exists(listing):
         sys.exit(f"hil: {listing} is missing: build the board first (cmake --build --preset {preset})")
-    binaries = []
+    binaries, process_per_test = [], set()
     with open(listing) as f:
         for line in f:
-            name, label = line.split()
+            name, label, *flags = line.split()
+            if "process-per-test" in flags:
+                process_per_test.add(name)
             wanted = not args.binary or name in args.binary
             if wanted and label not in args.exclude_label and os.path.exists(os.path.join(build, "bin", name)):
                 binaries.append(name)
@@ -226,7 +240,7 @@ def main():
     print(f"hil: firmware: {firmware.stdout.strip()}")
     firmware_ok = firmware.returncode == 0
 
-    # Every test of every binary, one process each, as ctest runs them.
+    # Every test of every binary.
     tests, skipped = [], []
     for name in binaries:
         listed = transport.run([f"bin/{name}", "--gtest_list_tests"], env, 300)
@@ -250,46 +264,78 @@ def main():
                 continue
             tests.append((name, test))
 
-    def run_one(item):
-        index, (binary, test) = item
+    # A binary's tests run in batches, a process each (ctest runs a process a test): a process's
+    # start and the emulator's translation of its code cost a fifth of a second a test under
+    # qemu, more than most tests. A batch that does not end normally (a crash, a timeout) leaves
+    # no results: its tests run again one process each, so the one at fault is named. A
+    # binary marked process-per-test in hil-tests.txt has batches of one.
+    def run_batch(item):
+        index, batch = item
+        binary = batch[0][1]
         xml_remote = f"results/{index}.xml"
         t0 = time.time()
+        timeout = args.timeout * len(batch)
         try:
-            r = transport.run([f"bin/{binary}", f"--gtest_filter={test}",
-                               f"--gtest_output=xml:{xml_remote}"], env, args.timeout)
+            r = transport.run([f"bin/{binary}", "--gtest_filter=" + ":".join(t for _, _, t in batch),
+                               f"--gtest_output=xml:{xml_remote}"], env, timeout)
             output, code = r.stdout, r.returncode
         except subprocess.TimeoutExpired:
-            output, code = f"timed out after {args.timeout} s", -1
+            output, code = f"timed out after {timeout} s", -1
         seconds = time.time() - t0
         local_xml = os.path.join(results_dir, f"{index}.xml")
-        status = "Failed"
+        cases = {}
         try:
             transport.get(xml_remote, local_xml)
-            case = ET.parse(local_xml).getroot().find(".//testcase")
-            if case is not None and case.get("result") == "skipped":
-                status = "Skipped"
-            elif code == 0 and case is not None and case.find("failure") is None:
-                status = "Passed"
+            for case in ET.parse(local_xml).getroot().iter("testcase"):
+                cases[f"{case.get('classname')}.{case.get('name')}"] = case
         except (OSError, subprocess.CalledProcessError, ET.ParseError):
             pass
-        return index, test, status, seconds, output
+        # A failed exit that no test's failure explains (a crash at exit, say) counts as none.
+        if code != 0 and not any(c.find("failure") is not None for c in cases.values()):
+            cases = {}
+        results = []
+        for test_index, _, test in batch:
+            case = cases.get(test)
+            if case is None:
+                if len(batch) == 1:
+                    results.append((test_index, test, "Failed", seconds, output))
+                else:
+                    results += run_batch((f"{index}-{test_index}", [(test_index, binary, test)]))
+                continue
+            status = "Failed"
+            if case.get("result") == "skipped":
+                status = "Skipped"
+            elif case.find("failure") is None:
+                status = "Passed"
+            results.append((test_index, test, status, float(case.get("time", "0")),
+                            output_of(test, output)))
+        return results
 
+    batches = []
+    for binary in binaries:
+        mine = [(i, b, t) for i, (b, t) in enumerate(tests, 1) if b == binary]
+        size = max(1, min(args.batch, -(-len(mine) // max(1, args.j))))
+        if binary in process_per_test:
+            size = 1
+        batches += [mine[k:k + size] for k in range(0, len(mine), size)]
     transport.mkdir("results")
     failed, passed, skipped_by_test = [], 0, []
     total = len(tests)
     width = max([len(t) for _, t in tests] + [10])
+    done = 0
     with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, args.j)) as pool:
-        for done, (index, test, status, seconds, output) in enumerate(
-                pool.map(run_one, enumerate(tests, 1)), 1):
-            print(f"{done:3}/{total} Test #{index}: {test} {'.' * (width + 3 - len(test))} "
-                  f"{status:>8} {seconds:7.2f} sec", flush=True)
-            if status == "Passed":
-                passed += 1
-            elif status == "Skipped":
-                skipped_by_test.append(test)
-            else:
-                failed.append(test)
-                print(output[-4000:])
+        for results in pool.map(run_batch, enumerate(batches, 1)):
+            for index, test, status, seconds, output in results:
+                done += 1
+                print(f"{done:3}/{total} Test #{index}: {test} {'.' * (width + 3 - len(test))} "
+                      f"{status:>8} {seconds:7.2f} sec", flush=True)
+                if status == "Passed":
+                    passed += 1
+                elif status == "Skipped":
+                    skipped_by_test.append(test)
+                else:
+                    failed.append(test)
+                    print(output[-4000:])
     transport.close()
 
     if firmware_ok:
