@@ -187,7 +187,8 @@ def main():
     parser.add_argument("-j", type=int, default=os.cpu_count() or 2)
     parser.add_argument("--batch", type=int, default=16,
                         help="most tests of one binary run in one process (1: ctest's way)")
-    parser.add_argument("--timeout", type=int, default=900, help="seconds per test")
+    parser.add_argument("--timeout", type=int, default=900,
+                        help="seconds per process (a test, or a batch of them)")
     parser.add_argument("--results", default="", help="folder for the JUnit XML (default in the build)")
     args = parser.parse_args()
 
@@ -274,13 +275,12 @@ def main():
         binary = batch[0][1]
         xml_remote = f"results/{index}.xml"
         t0 = time.time()
-        timeout = args.timeout * len(batch)
         try:
             r = transport.run([f"bin/{binary}", "--gtest_filter=" + ":".join(t for _, _, t in batch),
-                               f"--gtest_output=xml:{xml_remote}"], env, timeout)
+                               f"--gtest_output=xml:{xml_remote}"], env, args.timeout)
             output, code = r.stdout, r.returncode
         except subprocess.TimeoutExpired:
-            output, code = f"timed out after {timeout} s", -1
+            output, code = f"timed out after {args.timeout} s", -1
         seconds = time.time() - t0
         local_xml = os.path.join(results_dir, f"{index}.xml")
         cases = {}
