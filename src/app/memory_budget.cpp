@@ -21,11 +21,12 @@ MemoryBudget memory_budget(int board_mb) {
   return b;
 }
 
-Status check_memory_budget(const Params& params, int vocabulary_words, size_t per_frame_bytes,
-                           int frames, const MemoryBudget& budget, uint64_t* needed_bytes) {
+Status check_memory_budget(const Params& params, int vocabulary_words, size_t sensor_bytes,
+                           size_t per_frame_bytes, int frames, const MemoryBudget& budget,
+                           uint64_t* needed_bytes) {
   const MemoryNeed need = memory_need(params, vocabulary_words);
   const uint64_t results = static_cast<uint64_t>(per_frame_bytes) * static_cast<uint64_t>(frames);
-  *needed_bytes = need.total() + results;
+  *needed_bytes = need.total() + sensor_bytes + results;
   if (budget.bytes == 0 || *needed_bytes <= budget.bytes) return Status::ok();
   constexpr double kMb = 1 << 20;
   // One line of at most 255 characters (Status): the figures, then the key to lower first.
@@ -36,7 +37,7 @@ Status check_memory_budget(const Params& params, int vocabulary_words, size_t pe
       "%.0f MB; lower map.keyframe_pool",
       static_cast<double>(*needed_bytes) / kMb, static_cast<double>(budget.bytes) / kMb,
       budget.from, params.keyframe_pool_size, static_cast<double>(need.per_keyframe) / kMb,
-      static_cast<double>(need.mapper) / kMb, static_cast<double>(need.images) / kMb,
+      static_cast<double>(need.mapper) / kMb, static_cast<double>(need.images + sensor_bytes) / kMb,
       static_cast<double>(need.loop) / kMb, frames, static_cast<double>(results) / kMb);
 }
 

@@ -16,10 +16,12 @@ struct MemoryBudget {
 
 // board_mb > 0: that many MB (memory.budget_mb); 0: half of the machine's physical memory.
 MemoryBudget memory_budget(int board_mb);
-// vocabulary_words: of the loaded vocabulary, 0 without loop closure. per_frame_bytes x
-// frames: what the job keeps for every frame (a replay's results). Ok when the need fits;
-// *needed_bytes is the need either way.
-Status check_memory_budget(const Params& params, int vocabulary_words, size_t per_frame_bytes,
-                           int frames, const MemoryBudget& budget, uint64_t* needed_bytes);
+// vocabulary_words: of the loaded vocabulary, 0 without loop closure. sensor_bytes: what the
+// sensor keeps beside the SLAM system (a registration thread's frames), counted with the camera's
+// images. per_frame_bytes x frames: what the job keeps for every frame (a replay's results). Ok
+// when the need fits; *needed_bytes is the need either way.
+Status check_memory_budget(const Params& params, int vocabulary_words, size_t sensor_bytes,
+                           size_t per_frame_bytes, int frames, const MemoryBudget& budget,
+                           uint64_t* needed_bytes);
 
 }  // namespace rgbdtam

@@ -49,7 +49,7 @@ Status ReplayJob::init(const ReplayOptions& options) {
   Status vocabulary_error;
   const bool loop = load_vocabulary(p, &vocabulary_, &vocabulary_error);
   RGBDTAM_RETURN_IF_ERROR(vocabulary_error);
-  RGBDTAM_RETURN_IF_ERROR(check_memory_budget(p, loop ? vocabulary_.words() : 0, per_frame,
+  RGBDTAM_RETURN_IF_ERROR(check_memory_budget(p, loop ? vocabulary_.words() : 0, 0, per_frame,
                                               source_.frame_count(), memory_budget(0),
                                               &memory_needed_bytes_));
   RGBDTAM_RETURN_IF_ERROR(

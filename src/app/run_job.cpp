@@ -207,9 +207,11 @@ Status RunJob::init(const RunOptions& options) {
   Status vocabulary_error;
   const bool loop = load_vocabulary(params_, &vocabulary_, &vocabulary_error);
   RGBDTAM_RETURN_IF_ERROR(vocabulary_error);
-  RGBDTAM_RETURN_IF_ERROR(check_memory_budget(params_, loop ? vocabulary_.words() : 0, 0, 0,
-                                              memory_budget(board_.memory_budget_mb),
-                                              &memory_needed_bytes_));
+  const size_t sensor_bytes =
+      board_.sensor_registration_thread ? RegisteringSensor::bytes_needed(params_) : 0;
+  RGBDTAM_RETURN_IF_ERROR(check_memory_budget(
+      FirmwareRuntime::system_params(params_, board_), loop ? vocabulary_.words() : 0, sensor_bytes,
+      0, 0, memory_budget(board_.memory_budget_mb), &memory_needed_bytes_));
   RGBDTAM_RETURN_IF_ERROR(open_board_sensor(board_, params_, &sensor_, options.v4l2_io));
   if (options.replay_every_frame) {
     sensor_.replay_sensor.hold_every_frame();

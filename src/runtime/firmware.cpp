@@ -6,14 +6,19 @@
 
 namespace rgbdtam {
 
+Params FirmwareRuntime::system_params(const Params& params, const Board& board) {
+  Params p = params;
+  // Depth registered on the sensor's thread reaches the tracker as a registering device's does.
+  if (board.sensor_registration_thread) p.depth_camera = DepthCameraParams();
+  p.map_threaded = true;
+  p.loop.threaded = true;
+  return p;
+}
+
 Status FirmwareRuntime::init(const Params& params, const Board& board, ByteLink* link,
                              GpioOutputs* gpio, ClockFn clock, const Vocabulary* vocabulary) {
   RGBDTAM_RETURN_IF_ERROR(validate_board(board));
-  params_ = params;
-  // Depth registered on the sensor's thread reaches the tracker as a registering device's does.
-  if (board.sensor_registration_thread) params_.depth_camera = DepthCameraParams();
-  params_.map_threaded = true;
-  params_.loop.threaded = true;
+  params_ = system_params(params, board);
   RGBDTAM_RETURN_IF_ERROR(apply_board_capacity(board, &params_));
   board_ = board;
   clock_ = clock;

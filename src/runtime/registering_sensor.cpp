@@ -10,11 +10,17 @@ void RegisteringSensor::init(LiveSensor* sensor, const Params& params) {
   RGBDTAM_ASSERT(params.depth_camera.register_to_colour,
                  "a sensor thread that registers nothing would hand over the sensor's buffers");
   sensor_ = sensor;
-  registration_.init(params);
+  registration_.init(params, DepthInColour::Buffer::kCallers);  // into the slots' depth
   for (int i = 0; i < FrameHandoff::kSlots; ++i) {
     handoff_.slot(i).gray.allocate(params.camera.width_px, params.camera.height_px);
     handoff_.slot(i).depth.allocate(params.camera.width_px, params.camera.height_px);
   }
+}
+
+size_t RegisteringSensor::bytes_needed(const Params& params) {
+  const size_t pixels = static_cast<size_t>(params.camera.width_px) * params.camera.height_px;
+  return DepthInColour::bytes_needed(params, DepthInColour::Buffer::kCallers) +
+         FrameHandoff::kSlots * pixels * (sizeof(uint8_t) + sizeof(uint16_t));
 }
 
 Status RegisteringSensor::start(const ThreadPlacement& placement) {

@@ -12,22 +12,26 @@ namespace rgbdtam {
 
 class DepthInColour {
  public:
+  // Where the registered depth goes: a buffer of this object's (apply), or only the caller's
+  // (apply_into: a sensor thread that keeps several frames needs no buffer here).
+  enum class Buffer { kOwn, kCallers };
   // Init time.
-  void init(const Params& params);
+  void init(const Params& params, Buffer buffer = Buffer::kOwn);
   // The frame with its depth in the colour camera; valid until the next call (it may point
-  // into this object).
+  // into this object). Needs Buffer::kOwn.
   const SensorFrame& apply(const SensorFrame& frame);
-  // The same into the caller's buffer (colour's size), for a sensor thread that keeps several
-  // frames: out points into it, or passes through when nothing is moved.
+  // The same into the caller's buffer (colour's size): out points into it, or passes through
+  // when nothing is moved.
   void apply_into(const SensorFrame& frame, uint16_t* depth, SensorFrame* out);
   // The last apply()'s result.
   const SensorFrame& last() const { return frame_; }
   // Bytes init allocates for these params.
-  static size_t bytes_needed(const Params& params);
+  static size_t bytes_needed(const Params& params, Buffer buffer = Buffer::kOwn);
 
  private:
   bool on_ = false;
   int depth_width_px_ = 0, depth_height_px_ = 0;  // as the sensor delivers it
+  int colour_width_px_ = 0, colour_height_px_ = 0;
   DepthRegistration registration_;
   ImageU16 registered_;
   SensorFrame frame_;

@@ -40,6 +40,8 @@ class FirmwareRuntime {
   // vocabulary: for loop closure and relocalisation (null: off).
   Status init(const Params& params, const Board& board, ByteLink* link, GpioOutputs* gpio,
               ClockFn clock, const Vocabulary* vocabulary = nullptr);
+  // The params init gives the SLAM system on this board (its memory_need is the system's).
+  static Params system_params(const Params& params, const Board& board);
   // After init, before start: a saved map to start in (SlamSystem::load_map); the first pose
   // found in it is announced on the link.
   Status load_map(const uint8_t* data, size_t size, MapFileInfo* info);

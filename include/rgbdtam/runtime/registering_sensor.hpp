@@ -25,6 +25,8 @@ class RegisteringSensor : public LiveSensor {
   ~RegisteringSensor() override;
   // Init time: reads `sensor` (opened, not started) and registers its depth as params say.
   void init(LiveSensor* sensor, const Params& params);
+  // Bytes init allocates for these params: the registration's tables and the frames handed over.
+  static size_t bytes_needed(const Params& params);
   // Init time: no frame is overtaken (FrameHandoff::hold_every_frame).
   void hold_every_frame() { handoff_.hold_every_frame(); }
   // The sensor's start, then this thread on the same placement.
