@@ -6,17 +6,9 @@
 #                    Debian's uninstrumented builds: guidance covers our code, ASan all of it)
 #   text_formats     TUM lists, configs, boards, --set/--board-set values, trajectories
 #   map_file         map files, as replay and run load them and as the exporters read them
-#   tools/fuzz.sh [--build-only | --no-build] [seconds] [target...]
-# --build-only compiles the fuzzers and fuzzes nothing; --no-build fuzzes with the ones it left
-# (CI builds them in the background, with what the CPU has spare).
+#   tools/fuzz.sh [seconds] [target...]
 set -euo pipefail
 cd "$(dirname "$0")/.."
-building=true
-fuzzing=true
-case ${1:-} in
-  --build-only) fuzzing=false; shift ;;
-  --no-build) building=false; shift ;;
-esac
 seconds=${1:-60}
 shift || true
 targets=("$@")
@@ -31,10 +23,8 @@ flags=(-std=c++17 -gline-tables-only -O1 -fsanitize=fuzzer,address,undefined
 # Each folder's sources are compiled as units of up to eight files (as the CMake build's unity
 # batches: Eigen's templates instantiated once per unit, and the units of a target compiled side
 # by side), shared by the targets of one run, never across runs.
-if $building; then
-  rm -rf "$out/obj"
-  mkdir -p "$out/obj"
-fi
+rm -rf "$out/obj"
+mkdir -p "$out/obj"
 build() {  # name, sources... (the units not yet compiled, in parallel, then linked)
   local name=$1 objects=() missing=() dir files part unit chunks i j
   shift
@@ -57,7 +47,10 @@ build() {  # name, sources... (the units not yet compiled, in parallel, then lin
   clang++ "${flags[@]}" "${objects[@]}" -lpng -lz -o "$out/fuzz_$name"
 }
 
-seed_mavlink_decoder() { "$out/make_seeds" "$1"; }
+seed_mavlink_decoder() {
+  clang++ -std=c++17 -Iinclude src/runtime/mavlink.cpp tests/fuzz/make_seeds.cpp -o "$out/make_seeds"
+  "$out/make_seeds" "$1"
+}
 seed_png_decoder() { cp tests/fuzz/seeds/png/* "$1"/; }
 seed_text_formats() {  # the first byte chooses the format (fuzz_text_formats.cpp)
   local n=0
@@ -74,31 +67,21 @@ seed_map_file() { RGBDTAM_WRITE_MAP_SEEDS="$1" "$out/fuzz_map_file"; }
 fuzzers=()
 for t in "${targets[@]}"; do
   case $t in
-    mavlink_decoder) sources=(src/runtime/mavlink.cpp tests/fuzz/fuzz_mavlink_decoder.cpp) ;;
-    png_decoder) sources=(src/hal/png_decoder.cpp tests/fuzz/fuzz_png_decoder.cpp) ;;
+    mavlink_decoder) build "$t" src/runtime/mavlink.cpp tests/fuzz/fuzz_mavlink_decoder.cpp ;;
+    png_decoder) build "$t" src/hal/png_decoder.cpp tests/fuzz/fuzz_png_decoder.cpp ;;
     text_formats)
-      sources=(src/core/{assert,residuals}.cpp
-        src/hal/{tum_replay_source,tum_trajectory,tum_timestamp,file,clock,png_decoder}.cpp
-        src/runtime/{board,params,key_value}.cpp tests/fuzz/fuzz_text_formats.cpp) ;;
+      build "$t" src/core/assert.cpp src/core/residuals.cpp src/hal/tum_replay_source.cpp src/hal/tum_trajectory.cpp \
+        src/hal/tum_timestamp.cpp src/hal/file.cpp src/hal/clock.cpp src/hal/png_decoder.cpp \
+        src/runtime/board.cpp src/runtime/params.cpp src/runtime/key_value.cpp \
+        tests/fuzz/fuzz_text_formats.cpp ;;
     map_file)
-      sources=(src/core/{assert,camera,canny,features,keyframe_builder,place_database}.cpp
-        src/core/{pose_graph,pyramid,residuals,rigid_alignment,se3,tracker,tracking_health}.cpp
-        src/core/{view_alignment,vocabulary}.cpp
-        src/runtime/{map_file,place_recognition,loop_closing,map_checkpoint,params,key_value}.cpp
-        src/port/latency_stats.cpp tests/fuzz/fuzz_map_file.cpp) ;;
+      build "$t" src/core/{assert,camera,canny,features,keyframe_builder,place_database}.cpp \
+        src/core/{pose_graph,pyramid,residuals,rigid_alignment,se3,tracker,tracking_health}.cpp \
+        src/core/{view_alignment,vocabulary}.cpp src/runtime/map_file.cpp src/runtime/place_recognition.cpp \
+        src/runtime/loop_closing.cpp src/runtime/map_checkpoint.cpp src/runtime/params.cpp \
+        src/runtime/key_value.cpp src/port/latency_stats.cpp tests/fuzz/fuzz_map_file.cpp ;;
     *) echo "unknown fuzz target $t" >&2; exit 2 ;;
   esac
-  if $building; then
-    build "$t" "${sources[@]}"
-    if [ "$t" = mavlink_decoder ]; then
-      clang++ -std=c++17 -Iinclude src/runtime/mavlink.cpp tests/fuzz/make_seeds.cpp \
-        -o "$out/make_seeds"
-    fi
-  elif [ ! -x "$out/fuzz_$t" ]; then
-    echo "tools/fuzz.sh --no-build: no $out/fuzz_$t (tools/fuzz.sh --build-only makes it)" >&2
-    exit 2
-  fi
-  $fuzzing || continue
   corpus="$out/corpus_$t"
   mkdir -p "$corpus"
   "seed_$t" "$corpus"

@@ -24,17 +24,12 @@ configure() {
     wait "$pid" || { tail -n 30 "$logs"/configure-*.log; return 1; }
   done
 }
-echo "=== configure the host presets; aarch64 set-up and fuzzers' build behind ($(date +%T))"
-# The aarch64 part of the set-up (the arm64 sysroot, the cross-built Kinect libraries, the
-# boards' presets) and the fuzzers' build run at the lowest priority, on what the CPU has spare
-# (downloads, the real-time checks below, the tails of builds and test runs); in turn, they
-# took two minutes and a half.
-(renice -n 19 "$BASHPID" >/dev/null
-  tools/setup.sh --aarch64 >"$logs/setup-aarch64.log" 2>&1 &&
+echo "=== configure the host presets; the aarch64 set-up and presets beside the host build ($(date +%T))"
+# The aarch64 part of the set-up (the arm64 sysroot's downloads, the cross-built Kinect
+# libraries) is mostly waiting on the network and on one core.
+(tools/setup.sh --aarch64 >"$logs/setup-aarch64.log" 2>&1 &&
   configure aarch64-raspberry-pi-4 aarch64-raspberry-pi-5 aarch64-radxa-rock-5b) &
 aarch64_setup=$!
-(renice -n 19 "$BASHPID" >/dev/null; tools/fuzz.sh --build-only >"$logs/fuzz-build.log" 2>&1) &
-fuzz_build=$!
 configure host-release host-debug
 
 # build PRESET [TARGET...]: all targets unless named.
@@ -125,8 +120,7 @@ wait "$ssh_check" || ssh_ok=false
 cat "$logs/ssh.log"
 $ssh_ok || exit 1
 echo "=== fuzz: every parser, briefly ($(date +%T))"
-wait "$fuzz_build" || { cat "$logs/fuzz-build.log"; exit 1; }
-tools/fuzz.sh --no-build 5
+tools/fuzz.sh 5
 echo "=== each board's firmware"
 for board in host-emulation raspberry-pi-4 raspberry-pi-5 radxa-rock-5b; do
   preset=$(sed -n 's/^build\.preset *= *//p' "board/$board/board.conf")
