@@ -51,6 +51,7 @@ cv::Mat render(const Camera& c, const std::vector<cv::Point2f>& rays, int sample
                const cv::Matx33d& R, const cv::Vec3d& t, const Checkerboard& b) {
   cv::Mat image(c.size, CV_8U);
   const cv::Vec3d normal(R(0, 2), R(1, 2), R(2, 2));
+  const cv::Matx33d R_b_c = R.t();
   const double n_dot_t = normal.dot(t);
   const double s = b.square_m;
   const int n = samples * samples;
@@ -62,7 +63,7 @@ cv::Mat render(const Camera& c, const std::vector<cv::Point2f>& rays, int sample
       const double lambda = n_dot_t / normal.dot(ray);
       double value = 128;
       if (lambda > 0) {
-        const cv::Vec3d on_board = R.t() * (ray * lambda - t);
+        const cv::Vec3d on_board = R_b_c * (ray * lambda - t);
         const double x = on_board[0] / s, y = on_board[1] / s;
         const bool checker =
             x >= -1 && y >= -1 && x < b.inner_corners.width && y < b.inner_corners.height;
