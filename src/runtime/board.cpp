@@ -143,6 +143,9 @@ const KeySpec kBoardSpecs[] = {
      RGBDTAM_FIELD(finest_tracked_level), false},
     {"capacity.photometric_points", ValueType::kInt, 0, 1000000, "",
      "override tracker.photometric_points (0: keep)", RGBDTAM_FIELD(photometric_points), false},
+    {"capacity.local_window", ValueType::kBool, 0, 1, "",
+     "false: loop.window off (its second tracking of each keyframe's frame is the tracker core's)",
+     RGBDTAM_FIELD(local_window), false},
 };
 #undef RGBDTAM_TEXT
 #undef RGBDTAM_FIELD
@@ -366,6 +369,7 @@ Status apply_board_capacity(const Board& b, Params* p) {
   }
   if (b.finest_tracked_level == 1)
     RGBDTAM_RETURN_IF_ERROR(set_param("tracker.iterations_l0=0", source, p));
+  if (!b.local_window) RGBDTAM_RETURN_IF_ERROR(set_param("loop.window=false", source, p));
   return Status::ok();
 }
 

@@ -29,7 +29,7 @@ TEST(Allocations, NoneWhileRelocalisingOrClosingALoop) {
 }
 
 TEST(Allocations, NoneWhileBothStoresRecycle) {
-  // The same cut with a place store of 16 and a dense pool of 9: both wrap, and the loop module
+  // The same cut with a place store of 12 and a dense pool of 9: both wrap, and the loop module
   // drops the edges of forgotten places when its edge store fills.
   const std::string seq = testing::full_fr1_xyz();
   if (seq.empty()) GTEST_SKIP() << "full fr1_xyz not present on this machine";
@@ -37,9 +37,9 @@ TEST(Allocations, NoneWhileBothStoresRecycle) {
   ASSERT_TRUE(testing::cut_frames(seq, dir + "/cut", 150, 150));
   ReplayJob job;
   const long calls =
-      count_allocations_after_init({"loop.places=16", "map.keyframe_pool=9"}, &job, dir + "/cut");
+      count_allocations_after_init({"loop.places=12", "map.keyframe_pool=9"}, &job, dir + "/cut");
   const uint32_t forgotten = job.system().places().evicted();
-  EXPECT_GT(forgotten, 16u) << "the place store wrapped";
+  EXPECT_GT(forgotten, 12u) << "the place store wrapped";
   EXPECT_GT(job.system().tracking().keyframes().recycled(), 9);
   EXPECT_EQ(calls, 0) << g_bytes.load() << " bytes allocated after init";
   std::printf("%u places forgotten, %d dense keyframes recycled; %ld allocations after init\n",

@@ -202,6 +202,22 @@ TEST(Board, TheSmallBoardProfileTracksDownTo320x240WithTheBoardsPointBudget) {
                      "out of range");
 }
 
+TEST(Board, ABoardWithoutRoomForTheLocalWindowTurnsItOff) {
+  Params p;
+  ASSERT_TRUE(p.loop.window);
+  Board keeps;
+  ASSERT_TRUE(parse_board(kMinimalBoard, "keeps.conf", "board/keeps", &keeps).is_ok());
+  ASSERT_TRUE(apply_board_capacity(keeps, &p).is_ok());
+  EXPECT_TRUE(p.loop.window);
+  Board small;
+  ASSERT_TRUE(
+      parse_board(testing::with_changes(kMinimalBoard, "capacity.local_window = false\n").c_str(),
+                  "small.conf", "board/small", &small)
+          .is_ok());
+  ASSERT_TRUE(apply_board_capacity(small, &p).is_ok());
+  EXPECT_FALSE(p.loop.window);
+}
+
 TEST(Board, EndpointsSplit) {
   char ip[32];
   uint16_t port = 0;

@@ -88,6 +88,9 @@ struct Board {
   // evaluated once, for the health checks and the pose's information), with fewer points.
   int finest_tracked_level = 0;
   int photometric_points = 0;
+  // false: the local window stays off (loop.window). Its second tracking of each new keyframe's
+  // frame runs on the tracker's core, and a core with no room for it misses frames.
+  bool local_window = true;
 
   char directory[kTextBytes] = "";  // the board folder; relative paths in the file start here
 };
