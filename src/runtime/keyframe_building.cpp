@@ -14,7 +14,8 @@ size_t KeyframeBuildTask::bytes_needed(const Params& p, int map_points) {
   const size_t pixels = static_cast<size_t>(p.camera.width_px) * p.camera.height_px;
   return pixels * kImageBytesPerPixel + KeyframeBuilder::keyframe_bytes(p.camera, p.tracker) +
          KeyframeAliasFinder::bytes_needed(p.camera, p.tracker) +
-         static_cast<size_t>(kLocalMaps) * static_cast<size_t>(map_points) * sizeof(MapPoint);
+         static_cast<size_t>(kLocalMaps) * static_cast<size_t>(map_points) * sizeof(MapPoint) +
+         WindowMeasurement::bytes_needed(p);
 }
 
 void KeyframeBuildTask::allocate(const Params& p, int map_points, ClockFn clock) {
@@ -26,6 +27,7 @@ void KeyframeBuildTask::allocate(const Params& p, int map_points, ClockFn clock)
   frame_.allocate(p.camera, p.sensor.depth_factor, p.sensor.depth_range);
   propagated_.allocate(p.camera, p.sensor.depth_factor, p.sensor.depth_range);
   for (LocalMap& m : local_maps_) m.points.reserve_once(map_points);
+  window_.allocate(p, builder_);
 }
 
 void KeyframeBuildTask::submit(const KeyframeOrder& order, bool at_once) {
@@ -49,6 +51,7 @@ void KeyframeBuildTask::step(const KeyframeOrder& order) {
   builder_.build(frame_, order.id, order.timestamp_ns, order.T_w_k, &keyframe_,
                  order.with_local_maps ? &propagated_ : nullptr);
   aliases_.find(frame_, keyframe_, alias_range_m_, &keyframe_.aliases);
+  window_.measure(frame_);
   if (clock_ != nullptr) {
     last_build_ns_ = clock_() - t0;
     per_keyframe_.add(last_build_ns_);

@@ -229,15 +229,17 @@ void TrackingPipeline::accept(const Attempt& a, const SensorFrame& frame, PoseEs
     keyframes_.count_frame_awaiting();
   } else if (new_view) {
     KeyframeLink window;
-    if (!reuse_keyframe(a, frame.timestamp_ns, out, &window) && frames_.current().has_depth()) {
+    WindowRequest window_later;
+    if (!reuse_keyframe(a, frame.timestamp_ns, out, &window, &window_later) &&
+        frames_.current().has_depth()) {
       (void)keyframes_.ask(out->T_w_c, keyframes_.odometry_link(out->T_w_c, out->information), true,
-                           frames_.current_slot(), out, window);
+                           frames_.current_slot(), out, window, window_later);
     }
   }
 }
 
 bool TrackingPipeline::reuse_keyframe(const Attempt& current, int64_t t_ns, PoseEstimate* out,
-                                      KeyframeLink* window) {
+                                      KeyframeLink* window, WindowRequest* window_later) {
   // The earlier keyframes nearest to the camera, ranked by what they see of this frame at the
   // current estimate; the best is tracked. For the local window it is tracked when it sees half
   // of the frame, as two views must to show one place (shows_same_place).
@@ -261,13 +263,19 @@ bool TrackingPipeline::reuse_keyframe(const Attempt& current, int64_t t_ns, Pose
     }
   }
   if (best == nullptr) return false;
+  if (best_visible < overlap) {
+    // Too little of the frame in view to be taken up: the local window's measurement, which
+    // the keyframe builder's thread makes, off this core.
+    *window_later = {best, T_w_c, motion_, search_.typical_scales(), t_ns};
+    return false;
+  }
   // Reused when it tracks the frame healthily, sees enough of it and has not moved too far.
   // As the authors' test (points in view, a lenient photometric bound), it does not ask for
   // the appearance the last keyframe had: an older keyframe looks less like the frame, which
   // is the price of its smaller drift (asking for the overlap too left 89 keyframes instead of
   // about 30 on fr1_xyz, and 1.15 cm all-frames ATE).
   const Attempt reused = search_.track(best, frames_.current(), T_w_c, motion_, t_ns);
-  if (reused.failed != 0 || best_visible < overlap || reused.r.visible < overlap ||
+  if (reused.failed != 0 || reused.r.visible < overlap ||
       reused.r.parallax > params_.tracker.keyframe_parallax) {
     // Not taken up: the new keyframe is measured against it too, as against its reference.
     if (reused.failed == 0 && window_on) {

@@ -3,6 +3,7 @@
 // padded to whole SIMD blocks, so the tracker's per-point loops vectorise. Capacity is set once.
 
 #include <cstdint>
+#include <cstring>
 #include <memory>
 #include <utility>
 
@@ -60,6 +61,15 @@ class TrackPoints {
     std::swap(base_, other.base_);
     std::swap(stride_, other.stride_);
     std::swap(size_, other.size_);
+  }
+  // Another set's points, padding included, into this one's buffer (no allocation).
+  void copy_from(const TrackPoints& other) {
+    RGBDTAM_ASSERT(capacity_ == other.capacity_, "TrackPoints copied across capacities");
+    for (int f = 0; f < kFields; ++f) {
+      std::memcpy(field(f), other.field(f),
+                  sizeof(float) * static_cast<size_t>(other.padded_size()));
+    }
+    size_ = other.size_;
   }
   int size() const { return size_; }
   int padded_size() const { return round_up(size_, kBlock); }

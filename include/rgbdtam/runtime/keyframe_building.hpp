@@ -18,6 +18,7 @@
 #include "rgbdtam/port/spsc_ring.hpp"
 #include "rgbdtam/port/worker.hpp"
 #include "rgbdtam/runtime/params.hpp"
+#include "rgbdtam/runtime/tracking/window_measurement.hpp"
 
 namespace rgbdtam {
 
@@ -45,6 +46,10 @@ class KeyframeBuildTask {
   ImageF& gray_level0() { return frame_.gray(0); }
   ImageF& inverse_depth_level0() { return frame_.inverse_depth_level0(); }
   LocalMap& local_map(int i) { return local_maps_[i]; }
+  // The local window's measurement of the keyframe, made after it is built; ordered while
+  // idle(), read once built().
+  WindowMeasurement& window() { return window_; }
+  const WindowMeasurement& window() const { return window_; }
   // at_once: built here, on the caller's thread, in threaded mode too (nothing is in flight, so
   // the builder's thread is idle).
   void submit(const KeyframeOrder& order, bool at_once = false);
@@ -75,7 +80,8 @@ class KeyframeBuildTask {
   FramePyramid frame_;       // the keyframe's grey images and sensor inverse depth
   FramePyramid propagated_;  // ... its inverse depth with the local maps where the sensor is blind
   LocalMap local_maps_[kLocalMaps];
-  Keyframe keyframe_;       // its points, until handed over
+  Keyframe keyframe_;  // its points, until handed over
+  WindowMeasurement window_;
   bool in_flight_ = false;  // tracker's: submitted, not released
   std::atomic<bool> built_{false};
   LatencyStats per_keyframe_;  // builder's thread

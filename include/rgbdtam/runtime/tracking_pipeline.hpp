@@ -109,9 +109,10 @@ class TrackingPipeline {
   // continuous: tracked from the last valid pose (not relocalised).
   void accept(const Attempt& a, const SensorFrame& frame, PoseEstimate* out, bool continuous);
   // An earlier keyframe taken up again instead of a new one; else *window measures the new
-  // keyframe against the one that sees most of it, when it is tracked.
-  bool reuse_keyframe(const Attempt& current, int64_t t_ns, PoseEstimate* out,
-                      KeyframeLink* window);
+  // keyframe against the one that sees most of it, when it was tracked for reuse, or
+  // *window_later asks the keyframe builder to (when too little of it is in view for reuse).
+  bool reuse_keyframe(const Attempt& current, int64_t t_ns, PoseEstimate* out, KeyframeLink* window,
+                      WindowRequest* window_later);
   bool relocalise(const SensorFrame& frame, PoseEstimate* out);
   void find_in_loaded_map(const SensorFrame& frame, PoseEstimate* out);
   void on_lost(const SensorFrame& frame, uint32_t failed, PoseEstimate* out);

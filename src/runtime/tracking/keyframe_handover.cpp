@@ -63,8 +63,10 @@ KeyframeLink KeyframeHandover::restart_link() const {
 }
 
 bool KeyframeHandover::ask(const SE3& T_w_k, const KeyframeLink& link, bool to_mapper,
-                           int frame_slot, PoseEstimate* out, const KeyframeLink& window) {
+                           int frame_slot, PoseEstimate* out, const KeyframeLink& window,
+                           const WindowRequest& window_later) {
   if (building()) return false;
+  building_->window().order(window_later);
   // Ordered after the pose is out (order_pending), from this frame's buffer, which the next
   // frame leaves alone until then.
   out->flags |= kNewKeyframe;

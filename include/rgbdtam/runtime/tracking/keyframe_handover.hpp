@@ -13,17 +13,9 @@
 #include "rgbdtam/runtime/mapping.hpp"
 #include "rgbdtam/runtime/params.hpp"
 #include "rgbdtam/runtime/tracking/frame_buffers.hpp"
+#include "rgbdtam/runtime/tracking/keyframe_link.hpp"
 
 namespace rgbdtam {
-
-// What ties a new keyframe into the map's graph: the keyframe or place it was measured
-// against, how, the measurement, and its information (graph convention).
-struct KeyframeLink {
-  uint32_t reference_id = 0;
-  EdgeKind kind = EdgeKind::kRestart;
-  SE3 T_reference_keyframe;
-  Matrix6d information = Matrix6d::Zero();
-};
 
 struct HandoverCounters {
   uint32_t keyframes = 0;
@@ -70,9 +62,11 @@ class KeyframeHandover {
   void count_frame_awaiting() { ++counters_.frames_awaiting_keyframe; }
   // The frame in frame_slot becomes a keyframe at T_w_k once its pose is out (order_pending);
   // false while another is being built. to_mapper: the mapper maps it (a restart is not).
-  // window: a second measurement of it, against an earlier keyframe (kind kRestart: none).
+  // window: a second measurement of it, against an earlier keyframe (kind kRestart: none), or
+  // window_later: one the keyframe builder makes after the build.
   bool ask(const SE3& T_w_k, const KeyframeLink& link, bool to_mapper, int frame_slot,
-           PoseEstimate* out, const KeyframeLink& window = KeyframeLink());
+           PoseEstimate* out, const KeyframeLink& window = KeyframeLink(),
+           const WindowRequest& window_later = WindowRequest());
   bool due() const { return pending_.due; }
   // The asking frame's pose, as tracking measured it: offered to the mapper with the keyframe.
   void set_due_pose(const PoseEstimate& pose) { pending_.pose = pose; }
@@ -84,7 +78,9 @@ class KeyframeHandover {
   Keyframe* adopt_built(uint32_t map_epoch);
   const KeyframeLink& adopted_link() const { return pending_.link; }
   // The local window's measurement of the adopted keyframe (kind kRestart: none).
-  const KeyframeLink& adopted_window_link() const { return pending_.window; }
+  const KeyframeLink& adopted_window_link() const {
+    return building_->window().ordered() ? building_->window().link() : pending_.window;
+  }
   const FramePyramid& adopted_frame() const { return building_->frame(); }
   // The adopted keyframe goes to the mapper (if it asked to be mapped); the builder is free.
   void release_adopted();

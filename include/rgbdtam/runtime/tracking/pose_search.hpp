@@ -54,6 +54,9 @@ class PoseSearch {
   }
   // A healthy pose's scales teach what is typical.
   void learn_scales(const TrackResult& r);
+  // Another search's, to judge as it does (the local window's measurement).
+  const ReferenceScales& typical_scales() const { return typical_; }
+  void use_scales(const ReferenceScales& typical) { typical_ = typical; }
 
   const SearchCounters& counters() const { return counters_; }
 
