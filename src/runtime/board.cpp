@@ -144,7 +144,7 @@ const KeySpec kBoardSpecs[] = {
     {"capacity.photometric_points", ValueType::kInt, 0, 1000000, "",
      "override tracker.photometric_points (0: keep)", RGBDTAM_FIELD(photometric_points), false},
     {"capacity.local_window", ValueType::kBool, 0, 1, "",
-     "false: loop.window off (its second tracking of each keyframe's frame is the tracker core's)",
+     "false: loop.window off (for a tracker's core with no room to track on the map it refines)",
      RGBDTAM_FIELD(local_window), false},
 };
 #undef RGBDTAM_TEXT

@@ -88,8 +88,8 @@ struct Board {
   // evaluated once, for the health checks and the pose's information), with fewer points.
   int finest_tracked_level = 0;
   int photometric_points = 0;
-  // false: the local window stays off (loop.window). Its second tracking of each new keyframe's
-  // frame runs on the tracker's core, and a core with no room for it misses frames.
+  // false: the local window stays off (loop.window), for a tracker's core with no room to track
+  // on the map it refines (board/raspberry-pi-4/board.conf says why).
   bool local_window = true;
 
   char directory[kTextBytes] = "";  // the board folder; relative paths in the file start here

@@ -34,7 +34,6 @@ class WindowMeasurement {
   static size_t bytes_needed(const Params& params);
   // builder: sizes the copied keyframe as every keyframe.
   void allocate(const Params& params, const KeyframeBuilder& builder);
-  bool allocated() const { return allocated_; }
 
   // Tracker, while the builder is idle: the request's keyframe is copied.
   void order(const WindowRequest& request);
