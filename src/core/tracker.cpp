@@ -464,14 +464,7 @@ TrackResult Tracker::track(const Keyframe& kf, const FramePyramid& frame, const 
   TrackResult result;
   terms_ = terms;
   SE3 T_c_k = T_k_c_guess.inverse();
-  gain_ = 1.f;
-  brightness_ = 0.f;
-  LevelCost finest;
-  for (int level = kPyramidLevels - 1; level >= 0; --level) {
-    finest = optimize_level(kf, frame, level, &T_c_k, true, opt_.max_iterations[level],
-                            &result.iterations);
-    result.level_sigma[level] = ph_sigma_;
-  }
+  LevelCost finest = optimize_levels(kf, frame, 0, &T_c_k, &result);
   if (!finest.has_normal_equations) {
     add_normal_equations_of(photometric_points(kf, 0), geometric_points(kf, frame, 0), &finest);
   }
@@ -490,6 +483,28 @@ TrackResult Tracker::track(const Keyframe& kf, const FramePyramid& frame, const 
   constexpr int kMinResiduals = 100;
   result.state = finest.valid >= kMinResiduals ? TrackingState::kOk : TrackingState::kLost;
   return result;
+}
+
+Tracker::LevelCost Tracker::optimize_levels(const Keyframe& kf, const FramePyramid& frame,
+                                            int finest_level, SE3* T_c_k, TrackResult* result) {
+  gain_ = 1.f;
+  brightness_ = 0.f;
+  LevelCost cost;
+  for (int level = kPyramidLevels - 1; level >= finest_level; --level) {
+    cost = optimize_level(kf, frame, level, T_c_k, true, opt_.max_iterations[level],
+                          &result->iterations);
+    result->level_sigma[level] = ph_sigma_;
+  }
+  return cost;
+}
+
+SE3 Tracker::align(const Keyframe& kf, const FramePyramid& frame, const SE3& T_k_c_guess,
+                   uint8_t terms, int finest_level) {
+  terms_ = terms;
+  SE3 T_c_k = T_k_c_guess.inverse();
+  TrackResult unused;
+  (void)optimize_levels(kf, frame, finest_level, &T_c_k, &unused);
+  return T_c_k.inverse();
 }
 
 TrackResult Tracker::track_best(const Keyframe& kf, const FramePyramid& frame,

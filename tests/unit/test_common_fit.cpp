@@ -1,10 +1,13 @@
 // Two poses compared on the keyframe points both see (Tracker::fit_on_common_points), on the
 // rendered textured room: the comparison that replaced each pose's mean over its own points in
-// view when two minima compete (the latter favours a pose that sees only a sliver).
+// view when two minima compete (the latter favours a pose that sees only a sliver). And where
+// the coarse levels take a candidate (Tracker::align), which spares the finer ones a candidate
+// back in the pose's own basin.
 #include <gtest/gtest.h>
 
 #include "rgbdtam/core/keyframe_aliases.hpp"
 #include "rgbdtam/core/tracker.hpp"
+#include "rgbdtam/core/tracking_health.hpp"
 #include "rgbdtam/runtime/params.hpp"
 #include "synthetic_scene.hpp"
 #include "tum_writer.hpp"
@@ -73,6 +76,25 @@ TEST_F(CommonFit, PosesThatShareNoPointAreNotComparable) {
   compare(T_k_c_, behind, &a, &b);
   EXPECT_FALSE(std::isfinite(a));
   EXPECT_FALSE(std::isfinite(b));
+}
+
+TEST_F(CommonFit, AlignmentDownToTheFinestLevelIsTracking) {
+  const SE3 guess = T_k_c_ * SE3(Eigen::Quaterniond::Identity(), Vector3d(0.0, 0.01, 0.0));
+  const SE3 aligned = tracker_.align(kf_, frame_, guess, kAllTerms, 0);
+  const TrackResult tracked = tracker_.track(kf_, frame_, guess, scales_);
+  EXPECT_EQ(aligned.translation(), tracked.T_k_c.translation());
+  EXPECT_EQ(aligned.rotation(), tracked.T_k_c.rotation());
+}
+
+TEST_F(CommonFit, TheCoarseLevelsBringACandidateInThePosesBasinBackToIt) {
+  const TrackResult pose = tracker_.track(kf_, frame_, T_k_c_, scales_);
+  ASSERT_TRUE(same_pose(pose.T_k_c, T_k_c_));
+  // 3 cm aside, beyond what makes two poses the same, within the coarse levels' basin.
+  const SE3 candidate = pose.T_k_c * SE3(Eigen::Quaterniond::Identity(), Vector3d(0.03, 0.0, 0.0));
+  ASSERT_FALSE(same_pose(candidate, pose.T_k_c));
+  constexpr int kProbingLevel = 2;
+  EXPECT_TRUE(
+      same_pose(tracker_.align(kf_, frame_, candidate, kAllTerms, kProbingLevel), pose.T_k_c));
 }
 
 }  // namespace

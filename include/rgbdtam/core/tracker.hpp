@@ -182,6 +182,10 @@ class Tracker {
   // out anyway).
   TrackResult track(const Keyframe& kf, const FramePyramid& frame, const SE3& T_k_c_guess,
                     const ReferenceScales& reference, uint8_t terms = kAllTerms);
+  // Tracking's coarse-to-fine refinement from a guess, stopped after `finest_level`: where the
+  // coarse levels take it.
+  SE3 align(const Keyframe& kf, const FramePyramid& frame, const SE3& T_k_c_guess, uint8_t terms,
+            int finest_level);
   // A wider basin: each guess is refined at the coarsest level, and the one whose points in
   // view fit best at the reference scales is tracked through the pyramid.
   TrackResult track_best(const Keyframe& kf, const FramePyramid& frame, const SE3* T_k_c_guesses,
@@ -222,6 +226,10 @@ class Tracker {
   const TrackPoints& photometric_points(const Keyframe& kf, int level) const;
   const TrackPoints& geometric_points(const Keyframe& kf, const FramePyramid& frame,
                                       int level) const;
+  // Gauss-Newton from the coarsest level down to `finest_level` from T_c_k, with the gain and
+  // brightness reset; the finest level's cost.
+  LevelCost optimize_levels(const Keyframe& kf, const FramePyramid& frame, int finest_level,
+                            SE3* T_c_k, TrackResult* result);
   // Gauss-Newton on one level from T_c_k; the scratch buffers end at the returned pose.
   LevelCost optimize_level(const Keyframe& kf, const FramePyramid& frame, int level, SE3* T_c_k,
                            bool new_scale, int max_iterations, int* iterations);

@@ -22,7 +22,12 @@ constexpr int kMaxProbes = 96;
 // A minimum's basin at the probing levels spans about two of their pixels (the coarsest
 // converges from 2-3): probes further apart can step over one.
 constexpr double kBasinPx = 2.0;
-constexpr int kReachBeyondProbes = -1;
+// Candidate poses are compared at the probes' photometric scale.
+ReferenceScales probe_scales() {
+  ReferenceScales scales;
+  for (float& s : scales.photometric) s = kProbeSigma;
+  return scales;
+}
 }  // namespace
 
 void PoseSearch::allocate(const Keyframe& capacity_model, const TrackerOptions& tracker,
@@ -63,6 +68,7 @@ bool PoseSearch::unique_along_weak_direction(const TrackResult& r, Keyframe* kf,
   const double step_m = 0.5 * health_.max_speed_m_s * kFramePeriodS;
   for (const double sign : {-1.0, 1.0}) {
     const SE3 start = r.T_k_c * SE3::exp(r.weak_direction * (sign * step_m));
+    if (comes_back(*kf, frame, start, r.T_k_c, r.terms, kProbeLevel)) continue;
     const TrackResult other = tracker_.track(*kf, frame, start, typical_, r.terms);
     if (!same_pose(r.T_k_c, other.T_k_c) &&
         (uncertain_guess ||
@@ -73,6 +79,13 @@ bool PoseSearch::unique_along_weak_direction(const TrackResult& r, Keyframe* kf,
     }
   }
   return true;
+}
+
+bool PoseSearch::comes_back(const Keyframe& kf, const FramePyramid& frame, const SE3& start,
+                            const SE3& T_k_c, uint8_t terms, int level) {
+  // Back within the distance at which two poses are the same, the start is in the pose's own
+  // basin: the finer levels would refine the pose again, so they are spared.
+  return same_pose(tracker_.align(kf, frame, start, terms, level), T_k_c);
 }
 
 Attempt PoseSearch::judged(Keyframe* kf, const FramePyramid& frame, const TrackResult& r,
@@ -106,16 +119,21 @@ double PoseSearch::fit(const Keyframe& kf, const FramePyramid& frame, const SE3&
   return cost;
 }
 
-int PoseSearch::aliases_within(const Attempt& a, const Reach& within, Candidate* out) const {
+int PoseSearch::aliases_within(const Attempt& a, const FramePyramid& frame, const Reach& within,
+                               const Probing& probing, Candidate* out) {
   const KeyframeAliases& aliases = a.kf->aliases;
   int n = 0;
   for (int j = 0; j < aliases.count; ++j) {
     for (const double sign : {-1.0, 1.0}) {
-      // The pose moved by the alias in the keyframe's frame: the world repeats there.
+      // The pose moved by the alias in the keyframe's frame: the world repeats there, as the
+      // keyframe saw it. Seen from this frame it may not (parallax, a part out of view), and
+      // what fits clearly worse than the pose is looked at no closer than a probe would be.
       const SE3 T_k_c = SE3(Eigen::Quaterniond::Identity(), sign * aliases.shift_k[j]) * a.r.T_k_c;
-      if (((a.kf->T_w_k * T_k_c).translation() - within.centre_w).norm() <= within.radius_m) {
-        out[n++] = {T_k_c, 0.0};
+      if (((a.kf->T_w_k * T_k_c).translation() - within.centre_w).norm() > within.radius_m) {
+        continue;
       }
+      const double cost = fit(*a.kf, frame, T_k_c, probing.level, probe_scales(), probing.terms);
+      if (cost <= kProbeRatio * probing.pose_cost) out[n++] = {T_k_c, cost};
     }
   }
   return n;
@@ -132,29 +150,32 @@ void PoseSearch::resolve_within_reach(Attempt* a, const FramePyramid& frame,
     ++counters_.ambiguous;
     return;
   }
-  // Candidates: the keyframe's aliases within reach, each looked at; then the other minima the
-  // probes find, the comparable ones.
-  Candidate* candidates = candidates_;
-  const int from_aliases = aliases_within(*a, within, candidates);
-  const int probed =
-      probe_within(*a, frame, within, candidates + from_aliases, kMaxCandidates - from_aliases);
-  if (probed == kReachBeyondProbes) {
+  Probing probing;
+  if (!probing_for(*a, frame, within, &probing)) {
     // Another minimum could lie between the probes: nothing says this pose is the one.
     a->failed |= kBeyondSearch;
     ++counters_.beyond_search;
     return;
   }
+  // Candidates: the keyframe's aliases within reach, each comparable one looked at; then the
+  // other minima the probes find, the comparable ones.
+  Candidate* candidates = candidates_;
+  const int from_aliases = aliases_within(*a, frame, within, probing, candidates);
+  const int probed = probe_within(*a, frame, within, probing, candidates + from_aliases,
+                                  kMaxCandidates - from_aliases);
   if (from_aliases + probed == 0) return;
   // Each refined as tracking would, from there; the distinct healthy minima are compared at
   // the finest level. A probed one not refined (too many) could be the right one: ambiguous.
-  ReferenceScales scales;
-  for (float& s : scales.photometric) s = kProbeSigma;
+  const ReferenceScales scales = probe_scales();
   Attempt best = *a;
   double best_cost = fit(kf, frame, a->r.T_k_c, 0, scales, a->r.terms);
   SE3 seen[kMaxCandidates + 1] = {a->r.T_k_c};
   int distinct = 1;
   const int refined = from_aliases + std::min(probed, kMaxRefined);
   for (int i = 0; i < refined; ++i) {
+    if (comes_back(kf, frame, candidates[i].T_k_c, a->r.T_k_c, a->r.terms, probing.level)) {
+      continue;
+    }
     Attempt b;
     b.kf = a->kf;
     b.r = tracker_.track(kf, frame, candidates[i].T_k_c, typical_, a->r.terms);
@@ -192,19 +213,17 @@ void PoseSearch::resolve_within_reach(Attempt* a, const FramePyramid& frame,
   }
 }
 
-int PoseSearch::probe_within(const Attempt& a, const FramePyramid& frame, const Reach& within,
-                             Candidate* out, int room) {
-  const Keyframe& kf = *a.kf;
-  ReferenceScales scales;
-  for (float& s : scales.photometric) s = kProbeSigma;
+bool PoseSearch::probing_for(const Attempt& a, const FramePyramid& frame, const Reach& within,
+                             Probing* out) {
   // The scene's depth sets how far a pixel's motion is: probes a pixel apart at 160x120 (a
   // minimum's basin is a pixel or two there), or at 80x60 when the reach needs more than
   // kMaxProbes of them; a reach that even those would not cover a basin apart (a long loss,
   // a near wall) is beyond the search.
+  const Keyframe& kf = *a.kf;
   constexpr int kSample = 256;
   float depths[kSample];
   const TrackPoints& pts = kf.photometric(0).size() > 0 ? kf.photometric(0) : kf.geometric[0];
-  if (pts.size() == 0) return 0;
+  if (pts.size() == 0) return true;  // nothing to probe with, nor to compare
   const int stride = std::max(1, pts.size() / kSample);
   int n = 0;
   for (int i = 0; i < pts.size() && n < kSample; i += stride) depths[n++] = pts.z()[i];
@@ -217,26 +236,39 @@ int PoseSearch::probe_within(const Attempt& a, const FramePyramid& frame, const 
   }
   const double pixel_m = depth / frame.intrinsics(level).fx_px;
   const double spacing = std::max(pixel_m, 2.0 * within.radius_m / (kMaxProbes - 1));
-  if (spacing > kBasinPx * pixel_m) return kReachBeyondProbes;
-  const Vector3d centre_c = a.T_w_c().inverse() * within.centre_w;
+  if (spacing > kBasinPx * pixel_m) return false;
   // Probed on the image term, whose repeated texture makes the other minima (the depth term,
-  // four times the points at these levels, is smooth along them), along the directions the
-  // depth determines least first: the surfaces' own, along which a texture repeats.
-  const uint8_t terms =
+  // four times the points at these levels, is smooth along them).
+  out->level = level;
+  out->terms =
       (a.r.terms & kPhotometricTerm) != 0 ? static_cast<uint8_t>(kPhotometricTerm) : a.r.terms;
-  double lowest = fit(kf, frame, a.r.T_k_c, level, scales, terms);
+  out->spacing_m = spacing;
+  out->pose_cost = fit(kf, frame, a.r.T_k_c, level, probe_scales(), out->terms);
+  return true;
+}
+
+int PoseSearch::probe_within(const Attempt& a, const FramePyramid& frame, const Reach& within,
+                             const Probing& probing, Candidate* out, int room) {
+  if (probing.spacing_m == 0.0) return 0;
+  const Keyframe& kf = *a.kf;
+  const ReferenceScales scales = probe_scales();
+  const Vector3d centre_c = a.T_w_c().inverse() * within.centre_w;
+  // Along the directions the depth determines least first: the surfaces' own, along which a
+  // texture repeats.
+  double lowest = probing.pose_cost;
   int found = 0;
   for (int axis = 0; axis < 3; ++axis) {
     double offsets[kMaxProbes], costs[kMaxProbes];
     int m = 0;
     const double centre = a.r.depth_translation_axes.col(axis).dot(centre_c);
     for (double s = centre - within.radius_m;
-         s <= centre + within.radius_m + 1e-9 && m < kMaxProbes; s += spacing) {
+         s <= centre + within.radius_m + 1e-9 && m < kMaxProbes; s += probing.spacing_m) {
       offsets[m++] = s;
     }
     Vector6d d = Vector6d::Zero();
     d.head<3>() = a.r.depth_translation_axes.col(axis);
-    tracker_.profile(kf, frame, a.r.T_k_c, d, offsets, m, level, scales, terms, costs);
+    tracker_.profile(kf, frame, a.r.T_k_c, d, offsets, m, probing.level, scales, probing.terms,
+                     costs);
     for (int i = 0; i < m && found < room; ++i) {
       const bool minimum =
           (i == 0 || costs[i] <= costs[i - 1]) && (i == m - 1 || costs[i] <= costs[i + 1]);

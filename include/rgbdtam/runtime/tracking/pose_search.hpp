@@ -78,13 +78,24 @@ class PoseSearch {
     SE3 T_k_c;
     double cost = 0.0;
   };
-  // The pose moved by each of the keyframe's aliases that lands within reach, into out.
-  int aliases_within(const Attempt& a, const Reach& within, Candidate* out) const;
+  // Where the candidates within reach are looked at: the level and term, the probes' spacing
+  // (0: no points to probe with) and how well the pose itself fits there.
+  struct Probing {
+    int level = 0;
+    uint8_t terms = 0;
+    double spacing_m = 0.0;
+    double pose_cost = 0.0;
+  };
+  // False when the reach is too wide for probes to step on every minimum in it.
+  bool probing_for(const Attempt& a, const FramePyramid& frame, const Reach& within, Probing* out);
+  // The pose moved by each of the keyframe's aliases that lands within reach and fits about as
+  // well as the pose at the probing level, into out.
+  int aliases_within(const Attempt& a, const FramePyramid& frame, const Reach& within,
+                     const Probing& probing, Candidate* out);
   // The other minima probes along the surfaces' directions find within reach that fit about
-  // as well as the best at the probing level, best first; at most room of them. Negative when
-  // the reach is too wide for the probes to step on every minimum in it.
-  int probe_within(const Attempt& a, const FramePyramid& frame, const Reach& within, Candidate* out,
-                   int room);
+  // as well as the best at the probing level, best first; at most room of them.
+  int probe_within(const Attempt& a, const FramePyramid& frame, const Reach& within,
+                   const Probing& probing, Candidate* out, int room);
   // Looks for the other minima within reach along the camera's axes: a clearly better one
   // replaces the pose; one that fits about as well makes it ambiguous.
   void resolve_within_reach(Attempt* a, const FramePyramid& frame, const MotionState& motion,
@@ -93,6 +104,10 @@ class PoseSearch {
   // scales, at one level.
   double fit(const Keyframe& kf, const FramePyramid& frame, const SE3& T_k_c, int level,
              const ReferenceScales& scales, uint8_t terms);
+  // Whether tracking from start would find T_k_c again: the coarse levels, down to `level`,
+  // bring it back there.
+  bool comes_back(const Keyframe& kf, const FramePyramid& frame, const SE3& start, const SE3& T_k_c,
+                  uint8_t terms, int level);
   bool unique_along_weak_direction(const TrackResult& r, Keyframe* kf, const FramePyramid& frame,
                                    const MotionState& motion, int64_t t_ns);
 
