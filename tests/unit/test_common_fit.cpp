@@ -21,20 +21,13 @@ class CommonFit : public ::testing::Test {
     const testing::SyntheticScene room = testing::SyntheticScene::half_resolution();
     Params p = testing::synthetic_params(room);
     p.tracker = tracking_options(p);
-    undistorter_.init(p.camera, p.distortion);
-    auto pyramid_of = [&](const testing::SyntheticFrame& f, FramePyramid* out) {
-      out->allocate(p.camera, p.sensor.depth_factor, p.sensor.depth_range);
-      undistorter_.undistort_gray(f.gray.data(), &out->gray(0));
-      out->build_gray();
-      out->build_inverse_depth(f.depth.data(), undistorter_);
-    };
     FramePyramid own;
-    pyramid_of(room.render(SE3()), &own);
+    testing::synthetic_pyramid(room.render(SE3()), p, &own);
     builder_.allocate(p.camera, p.tracker);
     builder_.allocate_keyframe(&kf_);
     builder_.build(own, 0, 0, SE3(), &kf_);
     T_k_c_ = SE3(Eigen::Quaterniond::Identity(), Vector3d(0.03, 0.0, 0.0));
-    pyramid_of(room.render(T_k_c_), &frame_);
+    testing::synthetic_pyramid(room.render(T_k_c_), p, &frame_);
     tracker_.allocate(kf_, p.tracker);
     for (float& s : scales_.photometric) s = kProbeSigma;
   }
@@ -43,7 +36,6 @@ class CommonFit : public ::testing::Test {
     tracker_.fit_on_common_points(kf_, frame_, a, b, 0, scales_, kAllTerms, cost_a, cost_b);
   }
 
-  Undistorter undistorter_;
   KeyframeBuilder builder_;
   Keyframe kf_;
   FramePyramid frame_;

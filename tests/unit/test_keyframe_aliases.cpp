@@ -21,12 +21,7 @@ struct OwnKeyframe {
     like.depth_factor = depth_factor;
     p = testing::synthetic_params(like);
     p.tracker = tracking_options(p);
-    own.allocate(p.camera, p.sensor.depth_factor, p.sensor.depth_range);
-    Undistorter undistorter;
-    undistorter.init(p.camera, p.distortion);
-    undistorter.undistort_gray(f.gray.data(), &own.gray(0));
-    own.build_gray();
-    own.build_inverse_depth(f.depth.data(), undistorter);
+    testing::synthetic_pyramid(f, p, &own);
     KeyframeBuilder builder;
     builder.allocate(p.camera, p.tracker);
     builder.allocate_keyframe(&kf);

@@ -21,19 +21,11 @@ TEST(WindowMeasurement, TheBuildersMeasurementIsTheTrackersSearchFromACopyOfTheK
   p.health = health_limits(p);
   p.loop.enabled = true;
   p.loop.window = true;
-  Undistorter undistorter;
-  undistorter.init(p.camera, p.distortion);
-  auto pyramid_of = [&](const testing::SyntheticFrame& f, FramePyramid* out) {
-    out->allocate(p.camera, p.sensor.depth_factor, p.sensor.depth_range);
-    undistorter.undistort_gray(f.gray.data(), &out->gray(0));
-    out->build_gray();
-    out->build_inverse_depth(f.depth.data(), undistorter);
-  };
   FramePyramid keyframe_frame, frame;
-  pyramid_of(room.render(SE3()), &keyframe_frame);
+  testing::synthetic_pyramid(room.render(SE3()), p, &keyframe_frame);
   const SE3 T_w_c(Eigen::Quaterniond(Eigen::AngleAxisd(0.02, Vector3d::UnitY())),
                   Vector3d(0.04, 0.01, 0.0));
-  pyramid_of(room.render(T_w_c), &frame);
+  testing::synthetic_pyramid(room.render(T_w_c), p, &frame);
   KeyframeBuilder builder;
   builder.allocate(p.camera, p.tracker);
   Keyframe kf;

@@ -118,6 +118,15 @@ Params synthetic_params(const SyntheticScene& scene) {
   return p;
 }
 
+void synthetic_pyramid(const SyntheticFrame& f, const Params& p, FramePyramid* out) {
+  Undistorter undistorter;
+  undistorter.init(p.camera, p.distortion);
+  out->allocate(p.camera, p.sensor.depth_factor, p.sensor.depth_range);
+  undistorter.undistort_gray(f.gray.data(), &out->gray(0));
+  out->build_gray();
+  out->build_inverse_depth(f.depth.data(), undistorter);
+}
+
 std::string synthetic_config(const SyntheticScene& s) {
   char buf[512];
   std::snprintf(buf, sizeof(buf),

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "rgbdtam/core/pyramid.hpp"
 #include "rgbdtam/runtime/params.hpp"
 #include "synthetic_scene.hpp"
 
@@ -29,6 +30,8 @@ bool write_synthetic_sequence(const std::string& dir, const SyntheticScene& scen
 // matcher's own 0.1 px, not the effective 0.4 px that covers a real Kinect's registration and
 // timing errors.
 Params synthetic_params(const SyntheticScene& scene);
+// A rendered frame as tracking sees it: undistorted with p's camera, its depth with p's sensor.
+void synthetic_pyramid(const SyntheticFrame& f, const Params& p, FramePyramid* out);
 // The config text matching the scene's camera.
 std::string synthetic_config(const SyntheticScene& scene);
 bool write_text(const std::string& path, const std::string& text);
