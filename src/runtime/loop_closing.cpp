@@ -141,19 +141,21 @@ void LoopModule::add_keyframe(const LoopKeyframe& keyframe) {
   }
   bool correct = false;
   measure_hops(query_handle.slot);
-  // The local window: the tracker's second measurement, against an earlier keyframe a few
-  // measured edges away, refines the map at smaller disagreements than a revisit corrects it.
-  // Further away, or across a restart, it would close a loop unverified; on an image that
+  // The local window: the tracker's further measurements, against earlier keyframes a few
+  // measured edges away, refine the map at smaller disagreements than a revisit corrects it.
+  // Further away, or across a restart, one would close a loop unverified; on an image that
   // repeats, it may be a period off.
   bool refine = false;
-  const int window = store_->order_of(keyframe.window_id);
-  if (!keyframe.window_information.isZero() && window >= 0 && !keyframe.repeats) {
+  for (int i = 0; i < keyframe.window_edges && !keyframe.repeats; ++i) {
+    const WindowEdge& w = keyframe.window[i];
+    const int window = store_->order_of(w.window_id);
+    if (window < 0) continue;
     const PlaceHandle window_handle = store_->handle(window);
     const int hops = hops_[window_handle.slot];
     if (hops >= 2 && hops <= kCovisibleHops && !store_->at_slot(window_handle.slot).repeats) {
-      refine = add_edge({window_handle, query_handle, keyframe.T_window_keyframe,
-                         keyframe.window_information, EdgeKind::kCovisible},
-                        window_limit());
+      refine |= add_edge(
+          {window_handle, query_handle, w.T_window_keyframe, w.information, EdgeKind::kCovisible},
+          window_limit());
       ++counters_.window_edges;
       measure_hops(query_handle.slot);  // the window's place is now a neighbour, not a candidate
     }

@@ -207,12 +207,15 @@ const KeySpec kParamSpecs[] = {
     {"loop.min_correction_angle", ValueType::kDegreesAsRadians, 0, 180, "deg",
      "... or beyond this angle", RGBDTAM_FIELD(loop.min_correction_rad), false},
     {"loop.window", ValueType::kBool, 0, 1, "",
-     "track each new keyframe also against the earlier keyframe that sees most of it, and refine "
-     "the map with that measurement",
+     "track each new keyframe also against earlier keyframes that see much of it, and refine the "
+     "map with those measurements",
      RGBDTAM_FIELD(loop.window), false},
+    {"loop.window_keyframes", ValueType::kInt, 1, kMaxWindowEdges, "",
+     "... against this many of the earlier keyframes that see at least half of it, most first",
+     RGBDTAM_FIELD(loop.window_keyframes), false},
     {"loop.min_window_correction", ValueType::kReal, 0, 10, "m",
-     "that measurement refines the map when it disagrees with it beyond this, and the refined map "
-     "is sent when some keyframe moved further",
+     "a window measurement refines the map when it disagrees with it beyond this, and the refined "
+     "map is sent when some keyframe moved further",
      RGBDTAM_FIELD(loop.min_window_correction_m), false},
     {"loop.min_window_correction_angle", ValueType::kDegreesAsRadians, 0, 180, "deg",
      "... or beyond this angle", RGBDTAM_FIELD(loop.min_window_correction_rad), false},

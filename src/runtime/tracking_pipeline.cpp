@@ -5,6 +5,27 @@
 #include "rgbdtam/core/pose_graph.hpp"
 
 namespace rgbdtam {
+namespace {
+
+constexpr int kMaxReuseCandidates = 16;
+
+// Keyframes ranked by what they see of a frame, most first; of equals, the later added.
+struct RankedKeyframes {
+  Keyframe* keyframe[kMaxReuseCandidates];
+  double visible[kMaxReuseCandidates];
+  int count = 0;
+  void add(Keyframe* kf, double seen) {
+    int at = count++;
+    for (; at > 0 && visible[at - 1] <= seen; --at) {
+      keyframe[at] = keyframe[at - 1];
+      visible[at] = visible[at - 1];
+    }
+    keyframe[at] = kf;
+    visible[at] = seen;
+  }
+};
+
+}  // namespace
 
 Status TrackingPipeline::init(const Params& params, KeyframePool* keyframes,
                               KeyframeBuildTask* building, ClockFn clock) {
@@ -149,7 +170,7 @@ void TrackingPipeline::start(const SensorFrame& frame, PoseEstimate* out) {
 void TrackingPipeline::adopt_built_keyframe() {
   const Keyframe* kf = keyframes_.adopt_built(motion_.map_epoch());
   if (kf == nullptr) return;
-  loop_.offer_keyframe(*kf, keyframes_.adopted_link(), keyframes_.adopted_window_link(),
+  loop_.offer_keyframe(*kf, keyframes_.adopted_link(), keyframes_.adopted_window_links(),
                        keyframes_.adopted_frame());
   keyframes_.release_adopted();
 }
@@ -190,6 +211,15 @@ Attempt TrackingPipeline::estimate(int64_t t_ns) {
     if (a.failed == 0) {
       ++counters_.recovered_by_guesses;
       return a;
+    }
+  }
+  // Just after the reference was taken up again, the keyframe it replaced fitted the last
+  // frame: it is tried before a keyframe is made of that frame.
+  if (Keyframe* left = keyframes_.left()) {
+    const Attempt c = search_.from_guesses(left, frame, motion_, priors_, t_ns);
+    if (c.failed == 0) {
+      ++counters_.recovered_by_left_keyframe;
+      return c;
     }
   }
   Keyframe* last = keyframes_.from_last_valid_frame(frames_, motion_.T_w_last(), motion_.last_ns());
@@ -241,34 +271,41 @@ void TrackingPipeline::accept(const Attempt& a, const SensorFrame& frame, PoseEs
 bool TrackingPipeline::reuse_keyframe(const Attempt& current, int64_t t_ns, PoseEstimate* out,
                                       KeyframeLink* window, WindowRequest* window_later) {
   // The earlier keyframes nearest to the camera, ranked by what they see of this frame at the
-  // current estimate; the best is tracked. For the local window it is tracked when it sees half
-  // of the frame, as two views must to show one place (shows_same_place).
-  constexpr int kMaxCandidates = 16;
+  // current estimate; the best of map.reuse_candidates is tracked. For the local window, those
+  // that see half of the frame, as two views must to show one place (shows_same_place), are
+  // tracked too.
   constexpr double kWindowVisible = 0.5;
   const SE3 T_w_c = current.T_w_c();
-  Keyframe* candidates[kMaxCandidates];
-  const int count =
-      keyframes_.nearest(T_w_c, std::min(params_.reuse_candidates, kMaxCandidates), candidates);
   const double overlap = params_.tracker.keyframe_overlap;
   const bool window_on = params_.loop.window && loop_.has_places();
+  const int wanted =
+      std::max(params_.reuse_candidates, window_on ? params_.loop.window_keyframes : 0);
+  Keyframe* candidates[kMaxReuseCandidates];
+  const int count = keyframes_.nearest(T_w_c, std::min(wanted, kMaxReuseCandidates), candidates);
   Keyframe* best = nullptr;
   double best_visible = window_on ? std::min(kWindowVisible, overlap) : overlap;
+  RankedKeyframes in_window;  // of equals, the later first, as the best
   for (int i = 0; i < count; ++i) {
     keyframes_.adopt_map(candidates[i]);
     const double visible = search_.visible_at(*candidates[i], frames_.current(),
                                               candidates[i]->T_w_k.inverse() * T_w_c);
-    if (visible >= best_visible) {
+    if (i < params_.reuse_candidates && visible >= best_visible) {
       best = candidates[i];
       best_visible = visible;
     }
+    if (window_on && visible >= kWindowVisible) in_window.add(candidates[i], visible);
   }
-  if (best == nullptr) return false;
-  if (best_visible < overlap) {
-    // Too little of the frame in view to be taken up: the local window's measurement, which
-    // the keyframe builder's thread makes, off this core.
-    *window_later = {best, T_w_c, motion_, search_.typical_scales(), t_ns};
-    return false;
+  // The local window's measurements the keyframe builder's thread makes, off this core: all
+  // but the best's when the best is tracked here.
+  const bool best_tracked_here = best != nullptr && best_visible >= overlap;
+  *window_later = {{}, 0, T_w_c, motion_, search_.typical_scales(), t_ns};
+  const int later_wanted = params_.loop.window_keyframes - (best_tracked_here ? 1 : 0);
+  for (int i = 0; i < in_window.count && window_later->count < later_wanted; ++i) {
+    if (!best_tracked_here || in_window.keyframe[i] != best) {
+      window_later->references[window_later->count++] = in_window.keyframe[i];
+    }
   }
+  if (!best_tracked_here) return false;  // none, or too little of the frame in view for reuse
   // Reused when it tracks the frame healthily, sees enough of it and has not moved too far.
   // As the authors' test (points in view, a lenient photometric bound), it does not ask for
   // the appearance the last keyframe had: an older keyframe looks less like the frame, which
@@ -277,7 +314,8 @@ bool TrackingPipeline::reuse_keyframe(const Attempt& current, int64_t t_ns, Pose
   const Attempt reused = search_.track(best, frames_.current(), T_w_c, motion_, t_ns);
   if (reused.failed != 0 || reused.r.visible < overlap ||
       reused.r.parallax > params_.tracker.keyframe_parallax) {
-    // Not taken up: the new keyframe is measured against it too, as against its reference.
+    // Not taken up: the new keyframe is measured against it too, as against its reference (and
+    // against the window's others on the builder's thread).
     if (reused.failed == 0 && window_on) {
       window->reference_id = best->id;
       window->kind = EdgeKind::kCovisible;

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <initializer_list>
 #include <vector>
 
 #include "config_files.hpp"
@@ -75,11 +76,10 @@ struct LoopFixture {
     kf.view.allocate(scene.camera);
     frame.allocate(scene.camera, scene.depth_factor, DepthRange{0.3, 10.0});
   }
-  // A keyframe seen at T_w_true, believed at T_w_k, measured from the previous one (and, with
-  // window_information, from keyframe window_id too: the tracker's local window).
+  // A keyframe seen at T_w_true, believed at T_w_k, measured from the previous one (and from
+  // the window's keyframes too: the tracker's local window).
   void keyframe(uint32_t id, const SE3& T_w_true, const SE3& T_w_k, const SE3& T_previous_k,
-                uint32_t window_id = 0, const SE3& T_window_k = SE3(),
-                const Matrix6d& window_information = Matrix6d::Zero()) {
+                std::initializer_list<WindowEdge> window = {}) {
     render_into(scene, T_w_true, &frame);
     fill_keyframe(frame, &kf);
     kf.kind = LoopKeyframe::Kind::kKeyframe;
@@ -90,9 +90,8 @@ struct LoopFixture {
     kf.T_w_k = T_w_k;
     kf.T_reference_keyframe = T_previous_k;
     kf.information = 1e4 * Matrix6d::Identity();
-    kf.window_id = window_id;
-    kf.T_window_keyframe = T_window_k;
-    kf.window_information = window_information;
+    kf.window_edges = 0;
+    for (const WindowEdge& w : window) kf.window[kf.window_edges++] = w;
     kf.corrections_adopted = loop.counters().corrections;  // adopted at once, as in replay
     loop.step(kf);
     while (corrections.front() != nullptr) corrections.pop();
@@ -250,6 +249,24 @@ TEST(LoopModule, TheTrackersReuseOfAnEarlierKeyframeIsAnEdgeThatCorrectsTheMap) 
   EXPECT_LT(after, 0.2 * before);
 }
 
+// Keyframes 0..n-1 fed at truth(i), each measured from the one before with the odometry's drift
+// appended; keyframe n's believed pose and its measured step, not yet fed.
+struct Drifted {
+  SE3 believed;
+  SE3 step;
+};
+template <typename Truth>
+Drifted feed_drifting(LoopFixture* f, uint32_t n, const Truth& truth, const SE3& drift) {
+  SE3 believed = truth(0);
+  for (uint32_t i = 0; i < n; ++i) {
+    const SE3 step = i > 0 ? truth(i - 1).inverse() * truth(i) * drift : SE3();
+    if (i > 0) believed = believed * step;
+    f->keyframe(i, truth(i), believed, step);
+  }
+  const SE3 step = truth(n - 1).inverse() * truth(n) * drift;
+  return {believed * step, step};
+}
+
 // The local window (issue 33): keyframe 4 is measured again against keyframe 2, as the tracker
 // measures it against keyframe 3. Odometry drifted 4 mm a step: less than a revisit corrects
 // (2 cm), more than the window refines from (2 mm). The second measurement refines the map and
@@ -264,18 +281,11 @@ TEST(LoopModule, TheWindowsSecondMeasurementRefinesTheMapBelowTheRevisitLimit) {
        {Params().loop.min_window_correction_m, Params().loop.min_correction_m}) {
     LoopFixture f(testing::SyntheticScene::half_resolution(), 64, Params().loop.max_drift_ratio,
                   limit_m);
-    SE3 believed = start;
-    for (uint32_t i = 0; i < 4; ++i) {
-      const SE3 step = i > 0 ? truth(i - 1).inverse() * truth(i) * drift : SE3();
-      if (i > 0) believed = believed * step;
-      f.keyframe(i, truth(i), believed, step);
-    }
-    const SE3 step = truth(3).inverse() * truth(4) * drift;
-    believed = believed * step;
-    const double before = (believed.translation() - truth(4).translation()).norm();
+    const Drifted k4 = feed_drifting(&f, 4, truth, drift);
+    const double before = (k4.believed.translation() - truth(4).translation()).norm();
     ASSERT_EQ(f.loop.counters().corrections, 0u) << "the drift is below a revisit's limit";
-    f.keyframe(4, truth(4), believed, step, 2, truth(2).inverse() * truth(4),
-               1e4 * Matrix6d::Identity());
+    f.keyframe(4, truth(4), k4.believed, k4.step,
+               {{2, truth(2).inverse() * truth(4), 1e4 * Matrix6d::Identity()}});
     const double after = (f.store.in_order(4).T_w_k.translation() - truth(4).translation()).norm();
     std::printf("window limit %.0f mm: keyframe 4 %.1f mm from the truth before, %.1f after\n",
                 1000 * limit_m, 1000 * before, 1000 * after);
@@ -289,6 +299,37 @@ TEST(LoopModule, TheWindowsSecondMeasurementRefinesTheMapBelowTheRevisitLimit) {
       EXPECT_NEAR(after, before, 1e-9);
     }
   }
+}
+
+// The window measures a keyframe against several earlier ones (loop.window_keyframes): keyframe
+// 5 against keyframes 2 and 3, as the tracker measures it against 4. Each measurement is an edge
+// of its own, and the two take the drift out of keyframe 5 further than the nearer one alone.
+TEST(LoopModule, EachOfTheWindowsMeasurementsIsAnEdge) {
+  const SE3 start = testing::SyntheticScene::pose_at(0.0);
+  auto truth = [&](uint32_t i) {
+    return start * SE3(so3_exp(Vector3d(0, 0.08 * i, 0)), Vector3d::Zero());
+  };
+  const SE3 drift(Eigen::Quaterniond::Identity(), Vector3d(0.004, 0, 0));
+  const WindowEdge from_3{3, truth(3).inverse() * truth(5), 1e4 * Matrix6d::Identity()};
+  const WindowEdge from_2{2, truth(2).inverse() * truth(5), 1e4 * Matrix6d::Identity()};
+  double after[2] = {0.0, 0.0};
+  for (int edges = 1; edges <= 2; ++edges) {
+    LoopFixture f(testing::SyntheticScene::half_resolution());
+    const Drifted k5 = feed_drifting(&f, 5, truth, drift);
+    const double before = (k5.believed.translation() - truth(5).translation()).norm();
+    ASSERT_EQ(f.loop.counters().corrections, 0u) << "the drift is below a revisit's limit";
+    if (edges == 1) {
+      f.keyframe(5, truth(5), k5.believed, k5.step, {from_3});
+    } else {
+      f.keyframe(5, truth(5), k5.believed, k5.step, {from_3, from_2});
+    }
+    EXPECT_EQ(f.loop.counters().window_edges, static_cast<uint32_t>(edges));
+    after[edges - 1] = (f.store.in_order(5).T_w_k.translation() - truth(5).translation()).norm();
+    std::printf("%d window edges: keyframe 5 %.1f mm from the truth before, %.1f after\n", edges,
+                1000 * before, 1000 * after[edges - 1]);
+    EXPECT_LT(after[edges - 1], before);
+  }
+  EXPECT_LT(after[1], after[0]);
 }
 
 // Keyframes of the real clip against the synthetic room, both ways: no place of one is a

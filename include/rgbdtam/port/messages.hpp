@@ -105,6 +105,17 @@ enum class EdgeKind : uint8_t {
   kReuse,           // the tracker took up an earlier keyframe again (map reuse)
 };
 
+// The local window's measurements of a new keyframe: against at most this many earlier keyframes
+// (loop.window_keyframes).
+constexpr int kMaxWindowEdges = 4;
+
+// One of them: the keyframe in the earlier one, with its information (graph convention).
+struct WindowEdge {
+  uint32_t window_id = 0;
+  SE3 T_window_keyframe;
+  Matrix6d information = Matrix6d::Zero();
+};
+
 // Tracker -> loop module: a new keyframe (kind kKeyframe), or the tracker taking up an earlier
 // keyframe (kReuse: keyframe_id is the earlier one, reference_id the one left; no images).
 // The slot owns its images.
@@ -121,12 +132,10 @@ struct LoopKeyframe {
   // perturbation T_reference_keyframe exp(xi), xi = (v, omega); zero for a restart.
   SE3 T_reference_keyframe;
   Matrix6d information = Matrix6d::Zero();
-  // The local window's second measurement: the keyframe's frame tracked at full resolution, as
-  // against its reference, against an earlier keyframe that sees much of it; zero information
-  // when there is none.
-  uint32_t window_id = 0;
-  SE3 T_window_keyframe;
-  Matrix6d window_information = Matrix6d::Zero();
+  // The local window's further measurements: the keyframe's frame tracked at full resolution,
+  // as against its reference, against earlier keyframes that see much of it, most first.
+  WindowEdge window[kMaxWindowEdges];
+  int window_edges = 0;
   ImageF gray;           // level 0, undistorted, [0,1]
   ImageF inverse_depth;  // level 0 sensor inverse depth, 1/m
   View view;             // the pyramid's view level, remembered with the place

@@ -60,14 +60,18 @@ struct LoopParams {
   // optimised map is sent to the tracker when some place moved by more than this.
   double min_correction_m = 0.02;
   double min_correction_rad = 1.0 * M_PI / 180.0;
-  // The local window: each new keyframe's frame is also tracked, at full resolution, against the
-  // earlier keyframe that sees most of it, and that measurement refines the map when it
+  // The local window: each new keyframe's frame is also tracked, at full resolution, against
+  // earlier keyframes that see much of it, and each measurement refines the map when it
   // disagrees with it by more than these; the refined map is sent when some keyframe moved
   // further. Small: a correction within max_reported_jump is blended into the poses sent. On:
   // over dithered copies of the development sequences it cuts the error of those that drift
-  // most by a sixth to two fifths and costs the others 0.04-0.26 cm (docs/loop-closure.md, "The
+  // most by a fifth to a half and costs the others up to 0.14 cm (docs/loop-closure.md, "The
   // local window"); a robot's worst drift matters more than its best case.
   bool window = true;
+  // ... against up to this many of the earlier keyframes that see at least half of it, most
+  // first; each is one more tracking on the keyframe builder's thread. Three: measured against
+  // one, two and four over the same copies (the same page).
+  int window_keyframes = 3;
   double min_window_correction_m = 0.002;
   double min_window_correction_rad = 0.1 * M_PI / 180.0;
   // A correction that moves the camera further than this is a jump a consumer differencing

@@ -37,13 +37,14 @@ struct StageCounters {
   uint32_t tracked = 0;
   uint32_t lost = 0;
   uint32_t without_depth = 0;
-  uint32_t depth_not_surface = 0;        // ... of which the sensor's depth was set aside as noise
-  uint32_t depth_frozen = 0;             // ... or repeated the last depth frame: lost
-  uint32_t depth_units_off = 0;          // ... or was not in the sensor's units: lost
-  uint32_t retried = 0;                  // frames whose first estimate failed a health check
-  uint32_t recovered_by_guesses = 0;     // ... and passed from another initial guess
-  uint32_t recovered_by_last_frame = 0;  // ... or against the last valid frame
-  uint32_t relocalised = 0;              // lost frames found again in the map
+  uint32_t depth_not_surface = 0;     // ... of which the sensor's depth was set aside as noise
+  uint32_t depth_frozen = 0;          // ... or repeated the last depth frame: lost
+  uint32_t depth_units_off = 0;       // ... or was not in the sensor's units: lost
+  uint32_t retried = 0;               // frames whose first estimate failed a health check
+  uint32_t recovered_by_guesses = 0;  // ... and passed from another initial guess
+  uint32_t recovered_by_left_keyframe = 0;   // ... or against the keyframe reuse had just left
+  uint32_t recovered_by_last_frame = 0;      // ... or against the last valid frame
+  uint32_t relocalised = 0;                  // lost frames found again in the map
   uint32_t relocalised_on_new_keyframe = 0;  // ... on a new keyframe, not the place's own
   uint32_t relocalised_past_the_pool = 0;    // ... at a place whose dense keyframe was recycled
   uint32_t withheld = 0;                     // tracked frames not reported valid after a correction
@@ -109,8 +110,9 @@ class TrackingPipeline {
   // continuous: tracked from the last valid pose (not relocalised).
   void accept(const Attempt& a, const SensorFrame& frame, PoseEstimate* out, bool continuous);
   // An earlier keyframe taken up again instead of a new one; else *window measures the new
-  // keyframe against the one that sees most of it, when it was tracked for reuse, or
-  // *window_later asks the keyframe builder to (when too little of it is in view for reuse).
+  // keyframe against the one that sees most of it, when it was tracked for reuse, and
+  // *window_later asks the keyframe builder to measure it against the local window's others
+  // (and that one, when too little of it is in view for reuse).
   bool reuse_keyframe(const Attempt& current, int64_t t_ns, PoseEstimate* out, KeyframeLink* window,
                       WindowRequest* window_later);
   bool relocalise(const SensorFrame& frame, PoseEstimate* out);

@@ -28,8 +28,16 @@ void KeyframeHandover::track_against(Keyframe* kf) {
 }
 
 void KeyframeHandover::take_up(Keyframe* kf) {
+  left_ = pool_->handle(reference_);
+  taken_up_ = kf;
   reference_ = kf;
   ++counters_.reused;
+}
+
+Keyframe* KeyframeHandover::left() const {
+  if (taken_up_ == nullptr || reference_ != taken_up_) return nullptr;
+  Keyframe* kf = pool_->get(left_);
+  return kf != nullptr && kf->id >= oldest_in_frame_id_ ? kf : nullptr;
 }
 
 Keyframe* KeyframeHandover::from_last_valid_frame(const FrameBuffers& frames, const SE3& T_w_last,
@@ -122,6 +130,14 @@ Keyframe* KeyframeHandover::adopt_built(uint32_t map_epoch) {
   fallback_ = nullptr;
   ++counters_.keyframes;
   return kf;
+}
+
+WindowLinks KeyframeHandover::adopted_window_links() const {
+  WindowLinks links;
+  if (pending_.window.kind != EdgeKind::kRestart) links.add(pending_.window);
+  const WindowLinks& built = building_->window().links();
+  for (int i = 0; i < built.count; ++i) links.add(built.link[i]);
+  return links;
 }
 
 void KeyframeHandover::release_adopted() {

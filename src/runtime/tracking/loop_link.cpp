@@ -23,7 +23,7 @@ LoopKeyframe* LoopLink::slot() {
 }
 
 void LoopLink::offer_keyframe(const Keyframe& kf, const KeyframeLink& link,
-                              const KeyframeLink& window, const FramePyramid& f) {
+                              const WindowLinks& window, const FramePyramid& f) {
   LoopKeyframe* s = slot();
   if (s == nullptr) return;
   s->kind = LoopKeyframe::Kind::kKeyframe;
@@ -35,9 +35,11 @@ void LoopLink::offer_keyframe(const Keyframe& kf, const KeyframeLink& link,
   s->T_w_k = kf.T_w_k;
   s->T_reference_keyframe = link.T_reference_keyframe;
   s->information = link.information;
-  s->window_id = window.reference_id;
-  s->T_window_keyframe = window.T_reference_keyframe;
-  s->window_information = window.kind == EdgeKind::kRestart ? Matrix6d::Zero() : window.information;
+  s->window_edges = window.count;
+  for (int i = 0; i < window.count; ++i) {
+    s->window[i] = {window.link[i].reference_id, window.link[i].T_reference_keyframe,
+                    window.link[i].information};
+  }
   std::memcpy(s->gray.data(), f.gray(0).data(), sizeof(float) * s->gray.size());
   std::memcpy(s->inverse_depth.data(), f.inverse_depth(0).data(),
               sizeof(float) * s->inverse_depth.size());

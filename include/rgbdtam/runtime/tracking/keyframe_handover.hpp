@@ -46,6 +46,10 @@ class KeyframeHandover {
   void track_against(Keyframe* kf);
   // An earlier keyframe is taken up again (map reuse).
   void take_up(Keyframe* kf);
+  // The keyframe the last take_up left, while the reference is the one taken up and it is still
+  // in the pool, in the estimate's frame; else null. It fitted the frame before the reference
+  // did: a frame the taken-up keyframe does not fit may still fit it.
+  Keyframe* left() const;
   // The last valid frame's keyframe is no longer the estimate's (a restart, a relocalisation).
   void forget_fallback() { fallback_ = nullptr; }
   // The last valid frame as a keyframe (sensor depth only), built at once on the first call of
@@ -62,8 +66,8 @@ class KeyframeHandover {
   void count_frame_awaiting() { ++counters_.frames_awaiting_keyframe; }
   // The frame in frame_slot becomes a keyframe at T_w_k once its pose is out (order_pending);
   // false while another is being built. to_mapper: the mapper maps it (a restart is not).
-  // window: a second measurement of it, against an earlier keyframe (kind kRestart: none), or
-  // window_later: one the keyframe builder makes after the build.
+  // window: a further measurement of it, against an earlier keyframe (kind kRestart: none), and
+  // window_later: those the keyframe builder makes after the build.
   bool ask(const SE3& T_w_k, const KeyframeLink& link, bool to_mapper, int frame_slot,
            PoseEstimate* out, const KeyframeLink& window = KeyframeLink(),
            const WindowRequest& window_later = WindowRequest());
@@ -77,10 +81,8 @@ class KeyframeHandover {
   // or it was stale). Its link and frame stay readable until release_adopted().
   Keyframe* adopt_built(uint32_t map_epoch);
   const KeyframeLink& adopted_link() const { return pending_.link; }
-  // The local window's measurement of the adopted keyframe (kind kRestart: none).
-  const KeyframeLink& adopted_window_link() const {
-    return building_->window().ordered() ? building_->window().link() : pending_.window;
-  }
+  // The local window's measurements of the adopted keyframe: the tracker's, then the builder's.
+  WindowLinks adopted_window_links() const;
   const FramePyramid& adopted_frame() const { return building_->frame(); }
   // The adopted keyframe goes to the mapper (if it asked to be mapped); the builder is free.
   void release_adopted();
@@ -107,7 +109,10 @@ class KeyframeHandover {
   int nearest(const SE3& T_w_c, int wanted, Keyframe** out);
   // A restart places the camera at its last valid pose, not where it is: the keyframes before
   // it are in another frame until a relocalisation or a loop correction joins the two.
-  void restarted() { oldest_in_frame_id_ = next_keyframe_id_; }
+  void restarted() {
+    oldest_in_frame_id_ = next_keyframe_id_;
+    taken_up_ = nullptr;
+  }
   void joined() { oldest_in_frame_id_ = 0; }
   bool pinned(const Keyframe* kf) const { return pool_->pinned(kf); }
   const KeyframePool& pool() const { return *pool_; }
@@ -134,6 +139,10 @@ class KeyframeHandover {
   MapperQueue* mapper_queue_ = nullptr;
   Keyframe* reference_ = nullptr;
   Keyframe* fallback_ = nullptr;  // built from the last valid frame while tracking fails
+  // Left by the last take_up (its slot's generation: while the slot still holds it), for as
+  // long as the keyframe taken up is the reference.
+  KeyframeHandle left_;
+  Keyframe* taken_up_ = nullptr;
   PendingKeyframe pending_;
   uint32_t next_keyframe_id_ = 0;
   uint32_t oldest_in_frame_id_ = 0;  // keyframes before it: not in the estimate's frame

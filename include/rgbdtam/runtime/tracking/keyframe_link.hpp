@@ -3,6 +3,7 @@
 
 #include <cstdint>
 
+#include "rgbdtam/core/assert.hpp"
 #include "rgbdtam/core/se3.hpp"
 #include "rgbdtam/port/messages.hpp"
 
@@ -15,6 +16,16 @@ struct KeyframeLink {
   EdgeKind kind = EdgeKind::kRestart;
   SE3 T_reference_keyframe;
   Matrix6d information = Matrix6d::Zero();
+};
+
+// The local window's measurements of a new keyframe (kind kCovisible), most visible first.
+struct WindowLinks {
+  KeyframeLink link[kMaxWindowEdges];
+  int count = 0;
+  void add(const KeyframeLink& l) {
+    RGBDTAM_ASSERT(count < kMaxWindowEdges, "more window measurements than kMaxWindowEdges");
+    link[count++] = l;
+  }
 };
 
 }  // namespace rgbdtam

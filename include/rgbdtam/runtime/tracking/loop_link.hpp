@@ -23,9 +23,9 @@ class LoopLink {
                PlaceStore* places, const Vocabulary* vocabulary);
   bool has_places() const { return places_ != nullptr; }
 
-  // A new keyframe, tied to the map's graph by link (how its pose was measured) and window (a
-  // second measurement, against an earlier keyframe), with its level-0 images and view.
-  void offer_keyframe(const Keyframe& kf, const KeyframeLink& link, const KeyframeLink& window,
+  // A new keyframe, tied to the map's graph by link (how its pose was measured) and window
+  // (further measurements, against earlier keyframes), with its level-0 images and view.
+  void offer_keyframe(const Keyframe& kf, const KeyframeLink& link, const WindowLinks& window,
                       const FramePyramid& f);
   // The frame was tracked against both the keyframe it left and the one taken up: their
   // relative pose, for the graph.
