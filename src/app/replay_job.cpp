@@ -217,12 +217,12 @@ void ReplayJob::print_summary() const {
   std::printf("frames: read %u, skipped %u, without depth %u; tracked %u, lost %u, resets %u\n",
               rc.delivered, rc.skipped, c.without_depth, c.tracked, c.lost, c.resets);
   std::printf(
-      "health: %u frames failed a first check; %u recovered from other initial guesses, %u "
-      "against the keyframe reuse had just left, %u against the last valid frame; %u tracked on "
-      "one term (the other did not fit); %u depth frames set aside (not a surface), %u frozen "
-      "(the last depth frame again)\n",
-      c.retried, c.recovered_by_guesses, c.recovered_by_left_keyframe, c.recovered_by_last_frame,
-      c.single_term, c.depth_not_surface, c.depth_frozen);
+      "health: %u frames failed a first check (%u wider searches); %u recovered from other "
+      "initial guesses, %u against the keyframe reuse had just left, %u against the last valid "
+      "frame; %u tracked on one term (the other did not fit); %u depth frames set aside (not a "
+      "surface), %u frozen (the last depth frame again)\n",
+      c.retried, c.wider_searches, c.recovered_by_guesses, c.recovered_by_left_keyframe,
+      c.recovered_by_last_frame, c.single_term, c.depth_not_surface, c.depth_frozen);
   std::printf("keyframes: %u created, %u reused, pool %d of %d, %d recycled\n", c.keyframes,
               c.reused, system_.tracking().keyframes().size(),
               system_.tracking().keyframes().capacity(), system_.tracking().keyframes().recycled());
@@ -313,6 +313,7 @@ void ReplayJob::print_json(const EvaluationReport& r) const {
       .integer("resets", c.resets)
       .number("track_max_ms", tracking_ms_.max_ms(), 3)
       .integer("retried", c.retried)
+      .integer("wider_searches", c.wider_searches)
       .integer("recovered_by_guesses", c.recovered_by_guesses)
       .integer("recovered_by_left_keyframe", c.recovered_by_left_keyframe)
       .integer("recovered_by_last_frame", c.recovered_by_last_frame)

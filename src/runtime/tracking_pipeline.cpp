@@ -201,25 +201,33 @@ Attempt TrackingPipeline::estimate(int64_t t_ns) {
   if (motion_.previous_valid()) a = search_.without_misfit_term(a, frame, motion_, t_ns);
   if (a.failed == 0) return a;
   ++counters_.retried;
-  const uint32_t first_failure = a.failed;
   // Searched from any guess or reference, the reach stays as wide: relocalisation may tell.
   if ((a.failed & kBeyondSearch) != 0) return a;
+  return recover(a, t_ns);
+}
+
+Attempt TrackingPipeline::recover(const Attempt& first, int64_t t_ns) {
+  Keyframe* reference = keyframes_.reference();
+  const FramePyramid& frame = frames_.current();
+  // A reference taken up again may fit this view worse than the keyframe it replaced, which
+  // fitted the frames until then: the predicted pose is tracked against that keyframe before
+  // any wider search, one search rather than the wider one's tens (on a Pi 4, a frame in time
+  // rather than two missed deadlines).
+  if (Keyframe* left = keyframes_.left()) {
+    const Attempt c = search_.track(left, frame, motion_.predict(t_ns), motion_, t_ns);
+    if (c.failed == 0) {
+      ++counters_.recovered_by_left_keyframe;
+      return c;
+    }
+  }
   // Two minima within reach that fit the reference about as well: a wider search against it
   // can add minima, not remove those. The last valid frame, a second reference, may tell.
-  if ((a.failed & kAmbiguous) == 0) {
+  Attempt a = first;
+  if ((first.failed & kAmbiguous) == 0) {
     a = search_.from_guesses(reference, frame, motion_, priors_, t_ns);
     if (a.failed == 0) {
       ++counters_.recovered_by_guesses;
       return a;
-    }
-  }
-  // Just after the reference was taken up again, the keyframe it replaced fitted the last
-  // frame: it is tried before a keyframe is made of that frame.
-  if (Keyframe* left = keyframes_.left()) {
-    const Attempt c = search_.from_guesses(left, frame, motion_, priors_, t_ns);
-    if (c.failed == 0) {
-      ++counters_.recovered_by_left_keyframe;
-      return c;
     }
   }
   Keyframe* last = keyframes_.from_last_valid_frame(frames_, motion_.T_w_last(), motion_.last_ns());
@@ -230,7 +238,7 @@ Attempt TrackingPipeline::estimate(int64_t t_ns) {
       return b;
     }
   }
-  a.failed |= first_failure;
+  a.failed |= first.failed;
   return a;
 }
 

@@ -107,6 +107,8 @@ class TrackingPipeline {
   void adopt_built_keyframe();
   void adopt_corrections();
   Attempt estimate(int64_t t_ns);
+  // After the reference failed (first): the other searches, cheapest first.
+  Attempt recover(const Attempt& first, int64_t t_ns);
   // continuous: tracked from the last valid pose (not relocalised).
   void accept(const Attempt& a, const SensorFrame& frame, PoseEstimate* out, bool continuous);
   // An earlier keyframe taken up again instead of a new one; else *window measures the new

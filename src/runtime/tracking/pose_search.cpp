@@ -304,6 +304,7 @@ Attempt PoseSearch::first(Keyframe* kf, const FramePyramid& frame, const MotionS
 
 Attempt PoseSearch::from_guesses(Keyframe* kf, const FramePyramid& frame, const MotionState& motion,
                                  const MotionPriors& priors, int64_t t_ns) {
+  ++counters_.wider_searches;
   const SE3 predicted = motion.predict(t_ns);
   SE3 guesses[kMaxGuesses];
   int n = 0;

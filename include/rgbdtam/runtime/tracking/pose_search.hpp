@@ -27,6 +27,7 @@ struct SearchCounters {
   uint32_t better_within_reach = 0;  // poses replaced by a clearly better one within reach
   uint32_t ambiguous = 0;            // poses with another within reach that fits about as well
   uint32_t beyond_search = 0;        // poses with a reach too wide to search for other minima
+  uint32_t wider_searches = 0;       // wider-basin searches run (tens of trackings each)
 };
 
 class PoseSearch {
