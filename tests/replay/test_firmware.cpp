@@ -199,9 +199,10 @@ TEST(Firmware, ASilentSensorIsReportedAsAStallAndItsReturnAsARecovery) {
 }
 
 // Issue 23: what the place store forgets is visible. Every frame a keyframe (overlap 0.99, no
-// reuse) into a store of 8 places: where the runtime keeps up it fills within the first second
-// and wraps. Under qemu the tracker misses its deadlines and the store may not fill (7 or 8
-// places in CI, whatever the clip's rate); then nothing may be forgotten or reported.
+// reuse) into a store of 8 places. The keyframes are built and described on the tracker's thread
+// (map and loop not threaded) and the replay holds every frame for the tracker: how many places
+// there are depends on the clip, not on how busy the machine is (threaded, a slow builder makes
+// fewer keyframes: 7 or 8 under qemu and the sanitizers).
 TEST(Firmware, ThePlaceStoreFillingIsReportedOnceAndCounted) {
   testing::SyntheticScene scene = testing::SyntheticScene::half_resolution();
   scene.diagonal_path = true;
@@ -211,10 +212,14 @@ TEST(Firmware, ThePlaceStoreFillingIsReportedOnceAndCounted) {
       dir + "/camera.conf",
       testing::synthetic_config(scene) +
           "loop.vocabulary = " + testing::source_path("data/vocabulary/tum-k10-l4.voc") +
-          "\nloop.places = 8\ntracker.keyframe_overlap = 0.99\nmap.reuse_candidates = 0\n"));
+          "\nloop.places = 8\ntracker.keyframe_overlap = 0.99\nmap.reuse_candidates = 0\n"
+          "map.threaded = false\nloop.threaded = false\n"));
   testing::Monitor monitor;
   RunJob job;
-  run_synthetic_at_10_hz(&monitor, &job, dir);
+  testing::run_board(
+      &monitor, &job,
+      {"sensor.device=" + dir, "sensor.config=" + dir + "/camera.conf", "sensor.fps=10"}, "",
+      /*every_frame=*/true);
   const SlamSystem& slam = job.runtime().slam();
   const FirmwareCounters& c = job.runtime().counters();
   const uint32_t places = slam.loop().counters().keyframes;
@@ -223,9 +228,8 @@ TEST(Firmware, ThePlaceStoreFillingIsReportedOnceAndCounted) {
       "misses, %u dropped)\n",
       places, slam.places().evicted(), slam.places().capacity(), c.frames, c.deadline_misses,
       job.sensor_dropped());
-  if (c.deadline_misses == 0 && job.sensor_dropped() == 0) {
-    ASSERT_GT(places, 8u) << "the store must have filled";
-  }
+  EXPECT_EQ(job.sensor_dropped(), 0u);
+  ASSERT_GT(places, 8u) << "the store must have filled";
   const uint32_t forgotten = places > 8 ? places - 8 : 0;
   EXPECT_EQ(slam.places().evicted(), forgotten);
   int reported = 0;
