@@ -41,8 +41,8 @@ void WindowMeasurement::order(const WindowRequest& request) {
 }
 
 void WindowMeasurement::measure(const FramePyramid& frame) {
+  search_.use_scales(request_.typical);
   for (int i = 0; i < request_.count; ++i) {
-    search_.use_scales(request_.typical);
     Keyframe* copy = &references_[i];
     const Attempt a = search_.track(copy, frame, request_.T_w_c, request_.motion, request_.t_ns);
     if (a.failed != 0) continue;
