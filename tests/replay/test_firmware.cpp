@@ -35,10 +35,13 @@ namespace rgbdtam {
 namespace {
 
 // The host-emulation board on a synthetic sequence written into dir (with dir/camera.conf).
-void run_synthetic_at_10_hz(testing::Monitor* monitor, RunJob* job, const std::string& dir) {
+// every_frame: the replay holds each frame for the tracker (testing::run_board).
+void run_synthetic_at_10_hz(testing::Monitor* monitor, RunJob* job, const std::string& dir,
+                            bool every_frame = false) {
   testing::run_board(
       monitor, job,
-      {"sensor.device=" + dir, "sensor.config=" + dir + "/camera.conf", "sensor.fps=10"});
+      {"sensor.device=" + dir, "sensor.config=" + dir + "/camera.conf", "sensor.fps=10"}, "",
+      every_frame);
 }
 
 TEST(Firmware, HostEmulationStreamsEveryPoseAndMatchesReplay) {
@@ -216,10 +219,7 @@ TEST(Firmware, ThePlaceStoreFillingIsReportedOnceAndCounted) {
           "map.threaded = false\nloop.threaded = false\n"));
   testing::Monitor monitor;
   RunJob job;
-  testing::run_board(
-      &monitor, &job,
-      {"sensor.device=" + dir, "sensor.config=" + dir + "/camera.conf", "sensor.fps=10"}, "",
-      /*every_frame=*/true);
+  run_synthetic_at_10_hz(&monitor, &job, dir, /*every_frame=*/true);
   const SlamSystem& slam = job.runtime().slam();
   const FirmwareCounters& c = job.runtime().counters();
   const uint32_t places = slam.loop().counters().keyframes;
