@@ -150,6 +150,11 @@ Status TumReplaySource::load(const TumListEntry& e, bool depth, void* out) {
   return Status::ok();
 }
 
+Status TumReplaySource::depth_at(int index, ImageU16* depth) {
+  RGBDTAM_ASSERT(index >= 0 && index < depth_.size, "depth_at: index outside depth.txt");
+  return load(depth_.entries[index], true, depth->data());
+}
+
 Status TumReplaySource::next(SensorFrame* frame, Status* warning) {
   return next_into(&gray_, &depth_img_, frame, warning);
 }

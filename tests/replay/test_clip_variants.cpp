@@ -2,7 +2,16 @@
 // with noise for its images, and wandered over. Whatever cannot be tracked is reported lost.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <string>
+#include <vector>
+
 #include "replay_runner.hpp"
+#include "rgbdtam/hal/file.hpp"
+#include "rgbdtam/hal/tum_replay_source.hpp"
+#include "rgbdtam/runtime/params.hpp"
 #include "stress_variants.hpp"
 #include "test_paths.hpp"
 
@@ -44,6 +53,126 @@ TEST(ClipVariants, DepthFromACameraOfItsOwnSizeIsRegisteredAndTrackedAsTheRegist
   std::printf("ATE %.2f cm registered by the sensor, %.2f cm from 848x480 in software\n",
               registered.report.ate.rmse_m * 100, moved.report.ate.rmse_m * 100);
   EXPECT_LT(moved.report.ate.rmse_m, registered.report.ate.rmse_m + 0.001) << "within 0.1 cm";
+}
+
+// The data lines of a TUM list (rgb.txt, depth.txt).
+int list_entries(const std::string& path) {
+  std::ifstream in(path);
+  int n = 0;
+  for (std::string line; std::getline(in, line);) n += !line.empty() && line[0] != '#';
+  return n;
+}
+
+TEST(ClipVariants, ADepthCopyKeepsEveryDepthImageWhateverThePairing) {
+  // Played at half the frame rate, half the depth images pair with no colour frame under the
+  // config's offset; a copy replayed under another offset still needs them.
+  const std::string dir = testing::make_temp_dir("clip_depth_copy");
+  const std::string clip = testing::source_path("data/tum_fr1_xyz_clip");
+  ASSERT_TRUE(testing::decimate_sequence(clip, dir + "/x2", 2));
+  ASSERT_TRUE(testing::dither_depth(dir + "/x2", dir + "/dithered",
+                                    testing::source_path("config/tum_fr1.conf"), 1));
+  const int listed = list_entries(dir + "/x2/depth.txt");
+  EXPECT_GT(listed, list_entries(dir + "/x2/rgb.txt") + 10);
+  EXPECT_EQ(list_entries(dir + "/dithered/depth.txt"), listed);
+}
+
+// The disparity each noisy depth pixel is off by, f b (1/z_noisy - 1/z), px, over the first
+// `frames` depth images of two copies of one sequence (0 where either has no depth), and
+// whether every hole of the first stayed a hole.
+struct DisparityErrors {
+  std::vector<double> px;
+  int width = 0;
+  bool holes_kept = true;
+};
+DisparityErrors disparity_errors(const std::string& clean, const std::string& noisy,
+                                 const Params& p, int frames) {
+  DisparityErrors e;
+  const SensorImageSize size = sensor_image_size(p);
+  e.width = size.depth_width_px;
+  TumReplaySource a, b;
+  EXPECT_TRUE(
+      a.open(clean.c_str(), size, p.sensor.max_rgb_depth_dt_ns, p.sensor.depth_time_offset_ns)
+          .is_ok());
+  EXPECT_TRUE(
+      b.open(noisy.c_str(), size, p.sensor.max_rgb_depth_dt_ns, p.sensor.depth_time_offset_ns)
+          .is_ok());
+  ImageU8 gray_a, gray_b;
+  ImageU16 depth_a, depth_b;
+  gray_a.allocate(size.width_px, size.height_px);
+  gray_b.allocate(size.width_px, size.height_px);
+  depth_a.allocate(size.depth_width_px, size.depth_height_px);
+  depth_b.allocate(size.depth_width_px, size.depth_height_px);
+  const double fb_raw = p.sensor.depth_focal_px * p.sensor.baseline_m * p.sensor.depth_factor;
+  for (int f = 0; f < frames; ++f) {
+    SensorFrame fa, fb;
+    Status warning;
+    if (!a.next_into(&gray_a, &depth_a, &fa, &warning).is_ok() ||
+        !b.next_into(&gray_b, &depth_b, &fb, &warning).is_ok() || fa.depth == nullptr ||
+        fb.depth == nullptr) {
+      ADD_FAILURE() << "frame " << f << " of both copies, with depth";
+      break;
+    }
+    for (size_t i = 0; i < size.depth_pixels(); ++i) {
+      const int za = fa.depth[i], zb = fb.depth[i];
+      if (za == 0 && zb != 0) e.holes_kept = false;
+      e.px.push_back(za == 0 || zb == 0 ? 0.0 : fb_raw / zb - fb_raw / za);
+    }
+  }
+  return e;
+}
+
+// Mean, spread and the correlation of horizontal neighbours (x, x + 1) where pair(x) says.
+template <typename Pair>
+void moments(const DisparityErrors& e, Pair pair, double* mean, double* sigma, double* corr) {
+  double n = 0, s = 0, ss = 0, nn = 0, sxy = 0;
+  for (size_t i = 0; i + 1 < e.px.size(); ++i) {
+    const double v = e.px[i];
+    if (v == 0.0) continue;
+    n += 1, s += v, ss += v * v;
+    const int x = static_cast<int>(i % e.width);
+    if (x + 1 < e.width && pair(x) && e.px[i + 1] != 0.0) nn += 1, sxy += v * e.px[i + 1];
+  }
+  *mean = s / n;
+  *sigma = std::sqrt(ss / n - *mean * *mean);
+  *corr = (sxy / nn - *mean * *mean) / (*sigma * *sigma);
+  std::printf("disparity error mean %.4f px, sigma %.4f px, neighbours' correlation %.3f\n", *mean,
+              *sigma, *corr);
+}
+
+TEST(ClipVariants, SensorNoiseHasTheModelsSpreadAndSharesItWithinABlock) {
+  const std::string dir = testing::make_temp_dir("clip_sensor_noise");
+  const std::string clip = testing::source_path("data/tum_fr1_xyz_clip");
+  const std::string config = testing::source_path("config/tum_fr1.conf");
+  char* text = nullptr;
+  ASSERT_TRUE(read_text_file(config.c_str(), 1 << 20, &text).is_ok());
+  Params p;
+  const Status parsed = parse_params(text, config.c_str(), &p);
+  delete[] text;
+  ASSERT_TRUE(parsed.is_ok()) << parsed.message();
+  // Gaussian disparity noise, then the disparity's step (uniform: q^2 / 12 more variance).
+  const double q = p.sensor.disparity_quantum_px;
+  const double expected =
+      std::sqrt(p.sensor.disparity_sigma_px * p.sensor.disparity_sigma_px + q * q / 12.0);
+  constexpr int kBlockPx = 8;
+  ASSERT_TRUE(testing::sensor_noise_depth(clip, dir + "/white", config, 1, 1));
+  ASSERT_TRUE(testing::sensor_noise_depth(clip, dir + "/blocks", config, 1, kBlockPx));
+  const DisparityErrors white = disparity_errors(clip, dir + "/white", p, 3);
+  const DisparityErrors blocks = disparity_errors(clip, dir + "/blocks", p, 3);
+  EXPECT_TRUE(white.holes_kept);
+  EXPECT_TRUE(blocks.holes_kept);
+  const auto any = [](int) { return true; };
+  const auto inside = [](int x) { return x % kBlockPx != kBlockPx - 1; };
+  const auto across = [](int x) { return x % kBlockPx == kBlockPx - 1; };
+  double mean, sigma, corr;
+  moments(white, any, &mean, &sigma, &corr);
+  EXPECT_NEAR(mean, 0.0, 0.01) << "px";
+  EXPECT_NEAR(sigma, expected, 0.05 * expected) << "px";
+  EXPECT_LT(std::fabs(corr), 0.05) << "white noise: neighbours independent";
+  moments(blocks, inside, &mean, &sigma, &corr);
+  EXPECT_NEAR(sigma, expected, 0.1 * expected) << "px";
+  EXPECT_GT(corr, 0.9) << "neighbours within a block share their draw";
+  moments(blocks, across, &mean, &sigma, &corr);
+  EXPECT_LT(std::fabs(corr), 0.1) << "neighbours across a block's edge do not";
 }
 
 TEST(ClipVariants, NoiseInGivesNoPoseOut) {

@@ -23,6 +23,8 @@ int usage() {
                "  rgbdtam-stress unregister <in> <out> --config <file> [--focal-scale <f>]\n"
                "                [--baseline-m <m>] [--depth-size <w>x<h>]\n"
                "  rgbdtam-stress dither <in> <out> --config <file> [--seed <n>]\n"
+               "  rgbdtam-stress sensor-noise <in> <out> --config <file> [--seed <n>]\n"
+               "                [--block-px <n>]\n"
                "  rgbdtam-stress two-camera <out> [--frames <n>] [--focal-scale <f>]\n"
                "                [--baseline-m <m>] [--depth-size <w>x<h>]\n"
                "  rgbdtam-stress pan <out> --peak-deg-s <deg/s> [--frames <n>] [--fps <hz>]\n"
@@ -49,7 +51,7 @@ int main(int argc, char** argv) {
   unsigned seed = 1;
   double exposure_ms = 0, peak = 0, fps = 30, gap_s = 1.0, distance_m = 0, yaw_deg = 0;
   DepthCameraShape depth_camera;
-  int every = 0, burst = 0, period = 0, frames = 150;
+  int every = 0, burst = 0, period = 0, frames = -1, block_px = 1;
   std::vector<std::string> positional;
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
@@ -66,6 +68,8 @@ int main(int argc, char** argv) {
       kind = argv[++i];
     } else if (a == "--seed" && has) {
       seed = static_cast<unsigned>(std::strtoul(argv[++i], nullptr, 10));
+    } else if (a == "--block-px" && has) {
+      block_px = std::atoi(argv[++i]);
     } else if (a == "--every" && has) {
       every = std::atoi(argv[++i]);
     } else if (a == "--burst" && has) {
@@ -94,6 +98,8 @@ int main(int argc, char** argv) {
       positional.push_back(a);
     }
   }
+  // Each verb's own length unless --frames gives one.
+  const auto frames_or = [&frames](int fallback) { return frames < 0 ? fallback : frames; };
   bool ok;
   if (verb == "decimate" && positional.size() == 3) {
     ok = decimate_sequence(positional[0], positional[1], std::atoi(positional[2].c_str()));
@@ -115,23 +121,26 @@ int main(int argc, char** argv) {
     ok = unregister_depth(positional[0], positional[1], config, depth_camera);
   } else if (verb == "dither" && positional.size() == 2 && config != nullptr) {
     ok = dither_depth(positional[0], positional[1], config, seed);
+  } else if (verb == "sensor-noise" && positional.size() == 2 && config != nullptr) {
+    ok = sensor_noise_depth(positional[0], positional[1], config, seed, block_px);
   } else if (verb == "concat" && positional.size() == 3) {
     ok = concatenate(positional[0], positional[1], positional[2], gap_s);
   } else if (verb == "wander" && positional.size() == 2 && config != nullptr) {
-    ok = wander_sequence(positional[0], positional[1], config, frames, seed);
+    ok = wander_sequence(positional[0], positional[1], config, frames_or(150), seed);
   } else if (verb == "degenerate" && positional.size() == 1) {
-    ok = degenerate_sequence(positional[0], scene, frames);
+    ok = degenerate_sequence(positional[0], scene, frames_or(150));
   } else if (verb == "wall" && positional.size() == 1) {
-    ok = wall_sequence(positional[0], distance_m, yaw_deg, frames);
+    ok = wall_sequence(positional[0], distance_m, yaw_deg, frames_or(150));
   } else if (verb == "repeated" && positional.size() == 1) {
     RepeatedScene s;
+    frames = frames_or(150);
     ok = RepeatedScene::named(scene, &s) && frames >= 2;
     if (!ok) std::fprintf(stderr, "repeated: no scene '%s' (--list names them)\n", scene.c_str());
     ok = ok && repeated_sequence(positional[0], s, frames);
   } else if (verb == "two-camera" && positional.size() == 1) {
-    ok = two_camera_sequence(positional[0], frames, depth_camera);
+    ok = two_camera_sequence(positional[0], frames_or(kTwoCameraFrames), depth_camera);
   } else if (verb == "pan" && positional.size() == 1) {
-    ok = pan_sequence(positional[0], peak, frames, fps);
+    ok = pan_sequence(positional[0], peak, frames_or(150), fps);
   } else {
     return usage();
   }

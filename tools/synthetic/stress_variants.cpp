@@ -364,27 +364,22 @@ bool rewrite_depth(const std::string& in, const std::string& out, const Params& 
     return false;
   }
   std::vector<std::string> depth_lines = {"# " + header};
-  ImageU8 gray;
   ImageU16 depth;
-  gray.allocate(size.width_px, size.height_px);
   depth.allocate(size.depth_width_px, size.depth_height_px);
   std::vector<uint16_t> moved(static_cast<size_t>(out_width) * out_height);
-  int64_t last_stamp_ns = -1;
-  for (;;) {
-    SensorFrame frame;
-    Status warning;
-    s = source.next_into(&gray, &depth, &frame, &warning);
-    if (s.code() == StatusCode::kEndOfStream) break;
-    // Unreadable, without depth or paired again with the last depth: nothing new to move.
-    if (!s.is_ok() || frame.depth == nullptr || frame.depth_timestamp_ns == last_stamp_ns) continue;
-    last_stamp_ns = frame.depth_timestamp_ns;
-    move(frame.depth, moved.data());
+  // Every listed image, not only those the config's pairing gives a colour frame: a copy
+  // replayed under another pairing finds the depth it pairs with.
+  const TumList& list = source.depth_list();
+  for (int i = 0; i < list.size; ++i) {
+    if (!source.depth_at(i, &depth).is_ok()) continue;  // unreadable: the replay skips it too
+    move(depth.data(), moved.data());
     const std::string name = "depth/" + std::to_string(depth_lines.size() - 1) + ".png";
     if (!write_png_gray16(out + "/" + name, out_width, out_height, moved.data())) {
       return fail("cannot write " + out + "/" + name);
     }
     char stamp[32];
-    std::snprintf(stamp, sizeof(stamp), "%.6f", static_cast<double>(last_stamp_ns) * 1e-9);
+    std::snprintf(stamp, sizeof(stamp), "%.6f",
+                  static_cast<double>(list.entries[i].timestamp_ns) * 1e-9);
     depth_lines.push_back(std::string(stamp) + " " + name);
   }
   if (!write_lines(out + "/depth.txt", depth_lines)) return false;
@@ -485,6 +480,45 @@ bool dither_depth(const std::string& in, const std::string& out, const std::stri
                        });
 }
 
+bool sensor_noise_depth(const std::string& in, const std::string& out, const std::string& config,
+                        unsigned seed, int block_px) {
+  Params p;
+  if (!load_params(config, &p)) return false;
+  if (block_px < 1) return fail("the noise's block is at least one pixel");
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise_px(0.0, p.sensor.disparity_sigma_px);
+  const SensorImageSize size = sensor_image_size(p);
+  const int w = size.depth_width_px, h = size.depth_height_px;
+  const int blocks_x = (w + block_px - 1) / block_px;
+  std::vector<double> block_noise_px(static_cast<size_t>(blocks_x) *
+                                     ((h + block_px - 1) / block_px));
+  const double fb = p.sensor.depth_focal_px * p.sensor.baseline_m;
+  const double quantum_px = p.sensor.disparity_quantum_px;
+  return rewrite_depth(
+      in, out, p, w, h,
+      "depth of " + in + " with structured-light noise in " + std::to_string(block_px) +
+          "-pixel blocks, seed " + std::to_string(seed),
+      [&](const uint16_t* depth, uint16_t* noisy) {
+        for (double& n : block_noise_px) n = noise_px(rng);
+        for (int y = 0; y < h; ++y) {
+          for (int x = 0; x < w; ++x) {
+            const size_t i = static_cast<size_t>(y) * w + x;
+            const int v = depth[i];  // holes and the top value stay as they are
+            if (v == 0 || v == 65535) {
+              noisy[i] = static_cast<uint16_t>(v);
+              continue;
+            }
+            double disparity_px =
+                fb * p.sensor.depth_factor / v +
+                block_noise_px[static_cast<size_t>(y / block_px) * blocks_x + x / block_px];
+            if (quantum_px > 0) disparity_px = std::round(disparity_px / quantum_px) * quantum_px;
+            const double raw = disparity_px > 0 ? fb * p.sensor.depth_factor / disparity_px : 0;
+            noisy[i] = static_cast<uint16_t>(raw >= 1 && raw < 65535 ? std::lround(raw) : 0);
+          }
+        }
+      });
+}
+
 namespace {
 bool write_png(const std::string& path, int w, int h, const uint8_t* px) {
   return write_png_gray8(path, w, h, px);
@@ -561,7 +595,10 @@ bool noise_sequence(const std::string& in, const std::string& out, const std::st
 }
 
 bool two_camera_sequence(const std::string& out, int frames, const DepthCameraShape& shape) {
-  if (frames < 2) return fail("two-camera: frames >= 2");
+  if (frames < 2 || frames > kTwoCameraFrames) {
+    return fail("two-camera: 2 to " + std::to_string(kTwoCameraFrames) +
+                " frames (later the camera is too near the box to track)");
+  }
   if (!valid_shape("two-camera", shape)) return false;
   constexpr double kFps = 30.0;
   SyntheticScene scene;

@@ -70,11 +70,21 @@ bool unregister_depth(const std::string& in, const std::string& out, const std::
 // seeds shows how much of an accuracy number is the one draw of noise the recording holds.
 bool dither_depth(const std::string& in, const std::string& out, const std::string& config,
                   unsigned seed);
+// The depth of a sequence as a structured-light sensor measures it, in the model the tracker
+// weighs it by (config's depth.*): each pixel's disparity f b / z moved by Gaussian noise of
+// depth.disparity_sigma and rounded to depth.disparity_quantum. With block_px > 1 each
+// block_px square shares one draw, as the sensor's correlation window makes neighbours share
+// their error, which averaging over pixels cannot remove. Meant for exact rendered depth:
+// tracking it against these copies bounds what any refinement of the depths could give back.
+bool sensor_noise_depth(const std::string& in, const std::string& out, const std::string& config,
+                        unsigned seed, int block_px);
 // The synthetic room on its diagonal path (parallax around the box) seen by the colour camera and
 // by a depth camera of its own (shape; pinhole, no distortion): out/exact holds colour
 // with the depth rendered in the colour camera, out/depth_camera the same colour with the depth
 // camera's depth and the keys that register it. Prints how registration compares with the exact
 // depth (pixels filled, errors, near occlusion edges apart).
+// At most kTwoCameraFrames (3 s): later the glide takes the camera too near the box to track.
+constexpr int kTwoCameraFrames = 90;
 bool two_camera_sequence(const std::string& out, int frames, const DepthCameraShape& shape);
 // A degenerate synthetic scene (SyntheticScene::Layout: "corridor" or "room"), 30 Hz.
 bool degenerate_sequence(const std::string& out, const std::string& layout, int frames);

@@ -48,6 +48,9 @@ class TumReplaySource : public SensorSource {
   void skip_to(int index) { cursor_ = index > cursor_ ? index : cursor_; }
   const TumList& rgb_list() const { return rgb_; }
   const TumList& depth_list() const { return depth_; }
+  // Depth image `index` of depth.txt, paired with a colour frame or not, into depth (of the
+  // size opened): for tools that rewrite every depth image whatever the pairing.
+  Status depth_at(int index, ImageU16* depth);
   const ReplayCounters& counters() const { return counters_; }
   size_t png_arena_high_water() const { return png_.arena_high_water(); }
 
