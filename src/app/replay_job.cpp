@@ -232,10 +232,12 @@ void ReplayJob::print_summary() const {
     std::printf(
         "mapping: %u keyframes mapped (%s), %u frames triangulated, %u skipped to catch up, "
         "%u frames and %u keyframes dropped at the queue; per keyframe %.0f sensor, %.0f "
-        "multi-view, %.0f fused edge points; mapper ms/keyframe median %.1f, p95 %.1f\n",
+        "multi-view, %.0f fused edge points (the views %.0f %% of their information); mapper "
+        "ms/keyframe median %.1f, p95 %.1f\n",
         m.keyframes_mapped, options_.params.map_threaded ? "own thread" : "synchronous",
         m.frames_observed, m.frames_skipped_late, c.mapper_dropped_frames,
         c.mapper_dropped_keyframes, m.points_sensor / n, m.points_multiview / n, m.points_fused / n,
+        m.points_fused > 0 ? 100.0 * m.fused_multiview_share_sum / m.points_fused : 0.0,
         system_.mapper().time_per_keyframe().percentile_ms(0.5),
         system_.mapper().time_per_keyframe().percentile_ms(0.95));
   }

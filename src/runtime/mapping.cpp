@@ -198,6 +198,8 @@ void MappingModule::finalize(Job* job) {
         break;
       case DepthSource::kFused:
         ++counters_.points_fused;
+        counters_.fused_multiview_share_sum +=
+            1.0 - (p.sigma * p.sigma) / (sigma_sensor * sigma_sensor);
         break;
       case DepthSource::kNone:
         break;

@@ -40,6 +40,9 @@ struct MappingCounters {
   uint64_t points_sensor = 0;        // edge pixels whose depth is the sensor's alone
   uint64_t points_multiview = 0;     // ... multi-view alone (the sensor saw nothing there)
   uint64_t points_fused = 0;         // ... both, fused by inverse variance
+  // Summed over the fused pixels: the multi-view's share of each one's inverse-depth
+  // information (1 - sigma_fused^2 / sigma_sensor^2), what the views add beside the sensor.
+  double fused_multiview_share_sum = 0;
 };
 
 class MappingModule {
