@@ -82,8 +82,8 @@ check host-release -I "0,0,0,$release_only"
 # replays of half a minute or more under emulation (natively seconds; the code they run is run
 # under qemu by the other tests, such as RealClip's, the kidnapped frame's, the fakenect dump's
 # frame-exact test and the map file's damage test), the scripted autopilot's 50 frames (each
-# waited for: slow under emulation) and the place store's 30 keyframes (each built and described
-# on the tracker's thread: a minute under emulation): they run in the host suites, and everything
+# waited for: slow under emulation) and the place store's 30 keyframes (each waited for until
+# built, and described: a minute under emulation): they run in the host suites, and everything
 # on the board itself.
 build aarch64-raspberry-pi-4
 tools/hil/run.py raspberry-pi-4 qemu: --skip '^(Allocations\.|'\
