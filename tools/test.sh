@@ -116,7 +116,7 @@ wait "$ssh_check" || ssh_ok=false
 cat "$logs/ssh.log"
 $ssh_ok || exit 1
 echo "=== fuzz: every parser, briefly ($(date +%T))"
-tools/fuzz.sh 5
+FUZZ_OPT=-O0 tools/fuzz.sh 5
 echo "=== each board's firmware"
 for board in host-emulation raspberry-pi-4 raspberry-pi-5 radxa-rock-5b; do
   preset=$(sed -n 's/^build\.preset *= *//p' "board/$board/board.conf")

@@ -102,15 +102,21 @@ TEST(Features, AThirtyDegreeRollStillMatches) {
   expect_views_align(SE3(so3_exp(Vector3d(0, 0, 30 * kDeg)), Vector3d::Zero()), 40);
 }
 
-std::vector<std::vector<Descriptor>> training_images() {
-  std::vector<std::vector<Descriptor>> images;
-  for (int i = 0; i < 4; ++i) {
-    FeatureView v;
-    render_view(start_pose() * SE3(so3_exp(Vector3d(0, 0.1 * i, 0)), Vector3d(0.1 * i, 0, 0)), &v);
-    std::vector<Descriptor> d;
-    for (const Feature& f : v.features) d.push_back(f.descriptor);
-    images.push_back(d);
-  }
+// Rendered once a process: the HIL runner runs a binary's tests in one, where rendering them
+// for each test took most of the vocabulary tests' 30 s under qemu.
+const std::vector<std::vector<Descriptor>>& training_images() {
+  static const std::vector<std::vector<Descriptor>> images = [] {
+    std::vector<std::vector<Descriptor>> rendered;
+    for (int i = 0; i < 4; ++i) {
+      FeatureView v;
+      render_view(start_pose() * SE3(so3_exp(Vector3d(0, 0.1 * i, 0)), Vector3d(0.1 * i, 0, 0)),
+                  &v);
+      std::vector<Descriptor> d;
+      for (const Feature& f : v.features) d.push_back(f.descriptor);
+      rendered.push_back(d);
+    }
+    return rendered;
+  }();
   return images;
 }
 
@@ -127,7 +133,7 @@ uint32_t fnv1a(const uint8_t* data, size_t size) {
 }
 
 TEST(Vocabulary, TrainingIsDeterministicAndTheFileRoundTrips) {
-  const auto images = training_images();
+  const auto& images = training_images();
   const std::vector<uint8_t> first = bytes_of(Vocabulary::train(images, 5, 3));
   const std::vector<uint8_t> second = bytes_of(Vocabulary::train(images, 5, 3));
   EXPECT_EQ(first, second);
@@ -164,7 +170,7 @@ TEST(Vocabulary, DamagedFilesAreRefusedWithTheReason) {
 }
 
 TEST(Vocabulary, BagOfWordsIsNormalisedAndScoresItselfOne) {
-  const auto images = training_images();
+  const auto& images = training_images();
   const Vocabulary voc = Vocabulary::train(images, 5, 3);
   FeatureView v;
   render_view(start_pose(), &v);
