@@ -11,6 +11,7 @@
 
 #include "config_files.hpp"
 #include "replay_job.hpp"
+#include "replay_runner.hpp"
 #include "test_paths.hpp"
 
 namespace {
@@ -85,11 +86,26 @@ void operator delete[](void* p, size_t) noexcept { std::free(p); }
 namespace rgbdtam {
 namespace {
 
+// Every replay_and_evaluate of the binary counts its run's allocations.
+[[maybe_unused]] const bool g_replays_counted = [] {
+  testing::count_allocations_in_replays({[] {
+                                           g_calls = 0;
+                                           g_bytes = 0;
+                                           g_armed = true;
+                                         },
+                                         [] {
+                                           g_armed = false;
+                                           return g_calls.load();
+                                         }});
+  return true;
+}();
+
 // Replays a sequence (the committed clip unless given) with the given config overrides,
 // counting allocations from the end of init to the end of the run (mapper thread joined).
 // Returns the count.
-long count_allocations_after_init(std::initializer_list<const char*> overrides, ReplayJob* job,
-                                  std::string seq = std::string()) {
+[[maybe_unused]] long count_allocations_after_init(std::initializer_list<const char*> overrides,
+                                                   ReplayJob* job,
+                                                   std::string seq = std::string()) {
   ReplayOptions opt;
   const bool clip = seq.empty();
   if (clip) seq = testing::source_path("data/tum_fr1_xyz_clip");

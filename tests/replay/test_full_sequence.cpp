@@ -7,8 +7,23 @@
 #include "stress_variants.hpp"
 #include "test_paths.hpp"
 
+#ifdef RGBDTAM_COUNT_ALLOCATIONS
+#include "allocation_counting.hpp"
+#endif
+
 namespace rgbdtam {
 namespace {
+
+// Each replay of the file, and where the build counts allocations (static, unsanitized) none
+// after init: relocalising, closing loops, restarting, with stores that recycle.
+testing::ReplayOutcome replay(const std::string& seq, const std::string& config,
+                              std::initializer_list<const char*> overrides = {}) {
+  testing::ReplayOutcome out = testing::replay_and_evaluate(seq, config, overrides);
+  if (out.ran && out.allocations_after_init >= 0) {
+    EXPECT_EQ(out.allocations_after_init, 0) << seq << ": heap allocations after init";
+  }
+  return out;
+}
 
 // What autopilots fuse: the reported covariance against the real frame-to-frame error. A
 // consistent 6-dof covariance gives a mean NEES of 6; within a factor of two either way.
@@ -20,49 +35,39 @@ void expect_consistent_covariance(const testing::ReplayOutcome& out, const char*
               out.report.nees.mean, out.report.nees.median, out.report.nees.pairs);
 }
 
-TEST(FullSequence, Fr1XyzAllFramesAteWithinOnePointFiveCentimetres) {
+// The shipped config (mapping on) over all frames. The mapping issue: the fused multi-view map
+// must not cost accuracy against tracking alone. One run against one is a coin toss (a change
+// that should not matter, such as a Canny threshold 0.5 higher, moves either by up to 0.07 cm),
+// so this pair may differ by that much; tools/mapping_vs_tracking.sh compares the means of six
+// such pairs, within 0.03 cm. Where the map matters, beyond the sensor's range, the synthetic
+// far-wall test shows it.
+TEST(FullSequence, Fr1XyzAllFramesWithinOnePointTwoCentimetresAndMappingCostsNoAccuracy) {
   const std::string seq = testing::full_fr1_xyz();
   if (seq.empty()) GTEST_SKIP() << "full fr1_xyz not present on this machine";
-  const auto out = testing::replay_and_evaluate(seq, testing::source_path("config/tum_fr1.conf"));
-  ASSERT_TRUE(out.ran);
+  const std::string config = testing::source_path("config/tum_fr1.conf");
+  const auto out = replay(seq, config);
+  const auto alone = replay(seq, config, {"map.enabled=false"});
+  ASSERT_TRUE(out.ran && alone.ran);
   // The health checks stay quiet on the easy sequence: nothing lost, nothing retried away.
   EXPECT_EQ(out.counters.lost, 0u);
   EXPECT_EQ(out.report.false_valid.count, 0);
   EXPECT_DOUBLE_EQ(out.report.coverage.fraction(), 1.0);
-  ASSERT_TRUE(out.report.ate_ok);
-  EXPECT_LE(out.report.ate.rmse_m, 0.015);
-  std::printf("fr1_xyz: ATE %.2f cm over %d poses, RPE %.2f cm/s %.3f deg/s\n",
-              out.report.ate.rmse_m * 100, out.report.ate.compared,
-              out.report.rpe.trans_rmse_m * 100, out.report.rpe.rot_rmse_deg);
+  ASSERT_TRUE(out.report.ate_ok && alone.report.ate_ok);
+  EXPECT_LE(out.report.ate.rmse_m, 0.012);
+  EXPECT_LE(out.report.ate.rmse_m, alone.report.ate.rmse_m + 0.0007);
+  std::printf(
+      "fr1_xyz: ATE %.3f cm over %d poses (%.3f cm without mapping), RPE %.2f cm/s "
+      "%.3f deg/s\n",
+      out.report.ate.rmse_m * 100, out.report.ate.compared, alone.report.ate.rmse_m * 100,
+      out.report.rpe.trans_rmse_m * 100, out.report.rpe.rot_rmse_deg);
   expect_consistent_covariance(out, "fr1_xyz");
-}
-
-// The mapping issue: the fused multi-view map must not cost accuracy. One run against one is
-// a coin toss (a change that should not matter, such as a Canny threshold 0.5 higher, moves
-// either by up to 0.07 cm), so this pair may differ by that much; tools/mapping_vs_tracking.sh
-// compares the means of six such pairs, within 0.03 cm. Where the map matters, beyond the
-// sensor's range, the synthetic far-wall test shows it.
-TEST(FullSequence,
-     Fr1XyzMappingIsWithinOneRunsSpreadOfTrackingAloneAndWithinOnePointTwoCentimetres) {
-  const std::string seq = testing::full_fr1_xyz();
-  if (seq.empty()) GTEST_SKIP() << "full fr1_xyz not present on this machine";
-  const std::string config = testing::source_path("config/tum_fr1.conf");
-  const auto mapped = testing::replay_and_evaluate(seq, config, {"map.enabled=true"});
-  const auto alone = testing::replay_and_evaluate(seq, config, {"map.enabled=false"});
-  ASSERT_TRUE(mapped.ran && alone.ran);
-  ASSERT_TRUE(mapped.report.ate_ok && alone.report.ate_ok);
-  EXPECT_EQ(mapped.counters.lost, 0u);
-  EXPECT_LE(mapped.report.ate.rmse_m, 0.012);
-  EXPECT_LE(mapped.report.ate.rmse_m, alone.report.ate.rmse_m + 0.0007);
-  std::printf("all-frames ATE %.3f cm with mapping, %.3f cm without\n",
-              mapped.report.ate.rmse_m * 100, alone.report.ate.rmse_m * 100);
 }
 
 // The robust-tracking issue's development sequence: hand-held, fast, around a teddy bear.
 TEST(FullSequence, Fr3TeddyWithinOnePointFiveCentimetresAndNeverFalseValid) {
   const std::string seq = testing::fr3_teddy_200();
   if (seq.empty()) GTEST_SKIP() << "fr3_teddy_200 not present on this machine";
-  const auto out = testing::replay_and_evaluate(seq, testing::source_path("config/tum_fr3.conf"));
+  const auto out = replay(seq, testing::source_path("config/tum_fr3.conf"));
   testing::expect_tracked_or_lost(out, "fr3_teddy_200", 0.95);
   ASSERT_TRUE(out.report.ate_ok);
   EXPECT_LE(out.report.ate.rmse_m, 0.015);
@@ -79,7 +84,7 @@ TEST(FullSequence, Fr3TeddyBlurredOrFasterIsNeverFalseValid) {
   ASSERT_TRUE(testing::blur_sequence(seq, dir + "/blur", config, 30.0));
   ASSERT_TRUE(testing::decimate_sequence(seq, dir + "/x3", 3));
   for (const char* variant : {"/blur", "/x3"}) {
-    testing::expect_tracked_or_lost(testing::replay_and_evaluate(dir + variant, config),
+    testing::expect_tracked_or_lost(replay(dir + variant, config),
                                     std::string("fr3_teddy_200") + variant, 0.9);
   }
 }
@@ -92,10 +97,9 @@ TEST(FullSequence, Fr3TeddyBlurredOrFasterIsNeverFalseValid) {
 TEST(FullSequence, Fr3TeddyOnThePi4sProfileFramesLostByTheKeyframeTakenUpNeedNoWiderSearch) {
   const std::string seq = testing::fr3_teddy_200();
   if (seq.empty()) GTEST_SKIP() << "fr3_teddy_200 not present on this machine";
-  const auto out =
-      testing::replay_and_evaluate(seq, testing::source_path("config/tum_fr3.conf"),
-                                   {"tracker.iterations_l0=0", "tracker.photometric_points=4000",
-                                    "map.seeds=4000", "map.keyframe_pool=24"});
+  const auto out = replay(seq, testing::source_path("config/tum_fr3.conf"),
+                          {"tracker.iterations_l0=0", "tracker.photometric_points=4000",
+                           "map.seeds=4000", "map.keyframe_pool=24"});
   testing::expect_tracked_or_lost(out, "fr3_teddy_200, the Pi 4's profile", 1.0);
   std::printf("%u recovered against the keyframe left, %u wider searches\n",
               out.counters.recovered_by_left_keyframe, out.counters.wider_searches);
@@ -116,8 +120,8 @@ TEST(FullSequence, Fr3TeddyTwiceAsFastDriftsLessWithTheLocalWindow) {
   const std::string config = testing::source_path("config/tum_fr3.conf");
   const std::string dir = testing::make_temp_dir("teddy_x2_window");
   ASSERT_TRUE(testing::decimate_sequence(seq, dir + "/x2", 2));
-  const auto window = testing::replay_and_evaluate(dir + "/x2", config, {"loop.window=true"});
-  const auto without = testing::replay_and_evaluate(dir + "/x2", config, {"loop.window=false"});
+  const auto window = replay(dir + "/x2", config, {"loop.window=true"});
+  const auto without = replay(dir + "/x2", config, {"loop.window=false"});
   ASSERT_TRUE(window.ran && without.ran);
   std::printf(
       "teddy x2: live ATE %.2f cm with the window (%u window edges, %u corrections, %u "
@@ -139,8 +143,7 @@ TEST(FullSequence, Fr1XyzWithAHundredFramesCutIsRelocalisedAtOnce) {
   if (seq.empty()) GTEST_SKIP() << "full fr1_xyz not present on this machine";
   const std::string dir = testing::make_temp_dir("fr1_cut100");
   ASSERT_TRUE(testing::cut_frames(seq, dir + "/cut", 300, 100));
-  const auto out =
-      testing::replay_and_evaluate(dir + "/cut", testing::source_path("config/tum_fr1.conf"));
+  const auto out = replay(dir + "/cut", testing::source_path("config/tum_fr1.conf"));
   ASSERT_TRUE(out.ran);
   EXPECT_GE(out.counters.relocalised, 1u);
   EXPECT_LE(out.counters.lost, 10u) << "relocalised within 10 frames of the gap";
@@ -162,8 +165,7 @@ TEST(FullSequence, Fr1XyzCutAnywhereIsFoundAgainWithinTenFrames) {
     const std::string name =
         dir + "/cut" + std::to_string(cut.first) + "_" + std::to_string(cut.count);
     ASSERT_TRUE(testing::cut_frames(seq, name, cut.first, cut.count));
-    const auto out =
-        testing::replay_and_evaluate(name, testing::source_path("config/tum_fr1.conf"));
+    const auto out = replay(name, testing::source_path("config/tum_fr1.conf"));
     ASSERT_TRUE(out.ran);
     const std::string label =
         std::to_string(cut.count) + " frames cut at " + std::to_string(cut.first);
@@ -182,11 +184,11 @@ TEST(FullSequence, Fr1XyzSmallCorrectionsAreBlendedIntoThePosesSentWithoutAReset
   const std::string seq = testing::full_fr1_xyz();
   if (seq.empty()) GTEST_SKIP() << "full fr1_xyz not present on this machine";
   const std::string config = testing::source_path("config/tum_fr1.conf");
-  const auto blended = testing::replay_and_evaluate(
-      seq, config, {"loop.min_correction=0.005", "loop.min_correction_angle=0.2"});
-  const auto at_once = testing::replay_and_evaluate(
-      seq, config,
-      {"loop.min_correction=0.005", "loop.min_correction_angle=0.2", "loop.blend_rate=0"});
+  const auto blended =
+      replay(seq, config, {"loop.min_correction=0.005", "loop.min_correction_angle=0.2"});
+  const auto at_once =
+      replay(seq, config,
+             {"loop.min_correction=0.005", "loop.min_correction_angle=0.2", "loop.blend_rate=0"});
   ASSERT_TRUE(blended.ran && at_once.ran);
   std::printf("%u corrections, %u blended; live ATE %.3f cm blended, %.3f at once\n",
               blended.counters.loop_corrections, blended.counters.blended_corrections,
@@ -228,9 +230,8 @@ TEST(FullSequence, Fr1XyzBackAtTheStartIsFoundAgainWithoutARestartAfterThePlaces
   const std::string dir = testing::make_temp_dir("fr1_back_to_start");
   ASSERT_TRUE(testing::cut_frames(seq, dir + "/first400", 400, 398));
   ASSERT_TRUE(testing::concatenate(dir + "/first400", seq, dir + "/back", 1.0));
-  const auto out =
-      testing::replay_and_evaluate(dir + "/back", testing::source_path("config/tum_fr1.conf"),
-                                   {"loop.places=32", "map.keyframe_pool=9"});
+  const auto out = replay(dir + "/back", testing::source_path("config/tum_fr1.conf"),
+                          {"loop.places=32", "map.keyframe_pool=9"});
   ASSERT_TRUE(out.ran);
   std::printf("%u places remembered by a store of 32; %u relocalised, %u past the dense pool\n",
               out.loop.keyframes, out.counters.relocalised, out.counters.relocalised_past_the_pool);
@@ -254,8 +255,8 @@ TEST(FullSequence, Fr1XyzARestartJoinsTheMapAtTheNextLoop) {
   const std::string dir = testing::make_temp_dir("fr1_restart");
   ASSERT_TRUE(testing::cut_frames(seq, dir + "/cut", 150, 150));
   const std::string config = testing::source_path("config/tum_fr1.conf");
-  const auto alone = testing::replay_and_evaluate(dir + "/cut", config, {"loop.enabled=false"});
-  const auto joined = testing::replay_and_evaluate(dir + "/cut", config, {"loop.relocalise=false"});
+  const auto alone = replay(dir + "/cut", config, {"loop.enabled=false"});
+  const auto joined = replay(dir + "/cut", config, {"loop.relocalise=false"});
   ASSERT_TRUE(alone.ran && joined.ran);
   EXPECT_EQ(joined.counters.resets, 1u);
   EXPECT_GE(joined.loop.corrections, 1u);

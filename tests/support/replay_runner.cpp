@@ -12,6 +12,11 @@
 #include "test_paths.hpp"
 
 namespace rgbdtam::testing {
+namespace {
+AllocationCounter g_counter;
+}  // namespace
+
+void count_allocations_in_replays(AllocationCounter counter) { g_counter = counter; }
 
 ReplayOutcome replay_and_evaluate(const std::string& sequence, const std::string& config,
                                   std::initializer_list<const char*> overrides, MapSink* map_sink,
@@ -30,9 +35,11 @@ ReplayOutcome replay_and_evaluate(const std::string& sequence, const std::string
   ReplayJob job;
   out.status = job.init(opt);
   if (!out.status.is_ok()) return out;
+  if (g_counter.arm != nullptr) g_counter.arm();
   while (job.step()) {
   }
   out.status = job.finish();
+  if (g_counter.disarm != nullptr) out.allocations_after_init = g_counter.disarm();
   if (!out.status.is_ok()) return out;
   std::vector<StampedPose> gt;
   int bad = 0;

@@ -18,7 +18,18 @@ struct ReplayOutcome {
   EvaluationReport final_report;  // every tracked frame on its keyframe's final pose
   LoopCounters loop;
   double tracking_median_ms = 0;
+  // Heap allocations from the end of init to the end of the run, in a binary that counts them
+  // (allocation_counting.hpp); -1 in one that does not.
+  long allocations_after_init = -1;
 };
+
+// How a binary that counts allocations arms its counter, and disarms it (returning the count).
+struct AllocationCounter {
+  void (*arm)() = nullptr;
+  long (*disarm)() = nullptr;
+};
+// Every replay_and_evaluate from then on counts its run's allocations with it.
+void count_allocations_in_replays(AllocationCounter counter);
 
 // Map files to start in and to save the final map to (either may be null).
 struct MapFiles {
