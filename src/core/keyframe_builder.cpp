@@ -110,6 +110,7 @@ void KeyframeBuilder::build(const FramePyramid& frame, uint32_t id, int64_t time
   kf->id = id;
   kf->timestamp_ns = timestamp_ns;
   kf->T_w_k = T_w_k;
+  kf->T_k_kd = frame.T_c_d();
   kf->active_photometric = 0;
   prepare(frame);
   for (int l = 0; l < kPyramidLevels; ++l) {

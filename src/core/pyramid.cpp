@@ -109,6 +109,7 @@ void FramePyramid::build_inverse_depth_levels() {
 void FramePyramid::clear_depth() {
   for (auto& img : inv_depth_) img.fill(0.f);
   has_depth_ = false;
+  T_c_d_ = SE3();
 }
 
 namespace {

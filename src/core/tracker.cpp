@@ -411,7 +411,9 @@ Tracker::LevelCost Tracker::evaluate_level(const Keyframe& kf, const FramePyrami
     const float s = ph_sample_[i];
     ph_residual_[i] = s == kInvalid ? 0.f : gain_ * s + brightness_ - ref[i];
   }
-  project(geo, k, img.width(), img.height(), T_c_k);
+  // From the keyframe's depth camera to the frame's: each depth image as taken. The keyframe-side
+  // Jacobians stay those of T_c_k, off by the adjoint of a few milliseconds' motion.
+  project(geo, k, img.width(), img.height(), frame.T_c_d().inverse() * T_c_k * kf.T_k_kd);
   sample_geometric(geo, frame.inverse_depth(level));
   if (new_scale) update_scales(level, ph.size(), geo.size());
   return measure(ph, geo);

@@ -47,6 +47,7 @@ void KeyframeBuildTask::step(const KeyframeOrder& order) {
   const int64_t t0 = clock_ != nullptr ? clock_() : 0;
   frame_.build_gray();
   frame_.build_inverse_depth_levels();
+  frame_.set_T_c_d(order.T_c_d);
   if (order.with_local_maps) fill_sensor_blind_pixels(order.T_w_k);
   builder_.build(frame_, order.id, order.timestamp_ns, order.T_w_k, &keyframe_,
                  order.with_local_maps ? &propagated_ : nullptr);
@@ -64,6 +65,7 @@ void KeyframeBuildTask::hand_over(Keyframe* kf) {
   kf->id = keyframe_.id;
   kf->timestamp_ns = keyframe_.timestamp_ns;
   kf->T_w_k = keyframe_.T_w_k;
+  kf->T_k_kd = keyframe_.T_k_kd;
   kf->aliases = keyframe_.aliases;
   kf->active_photometric = 0;
   // Swapped, not copied: the slot's old buffers are the next build's.

@@ -110,6 +110,10 @@ const KeySpec kParamSpecs[] = {
     {"depth.time_offset_ms", ValueType::kMillisecondsAsNs, -100, 100, "ms",
      "pair colour at t with the depth stamped nearest t + offset",
      RGBDTAM_FIELD(sensor.depth_time_offset_ns), false},
+    {"depth.at_its_instant", ValueType::kBool, 0, 1, "",
+     "track each depth image from where the camera was when it was taken (its stamp less the "
+     "offset; the motion model's velocity)",
+     RGBDTAM_FIELD(sensor.depth_at_its_instant), false},
     {"tracker.residuals", ValueType::kCustom, 0, 0, "",
      "PS, PD, GIDS, GIDD, GIDD*, PS+GIDD, PS+GDD, ...", RGBDTAM_FIELD(tracker.residuals), false,
      parse_residuals, print_residuals},

@@ -9,6 +9,17 @@ namespace {
 
 constexpr int kMaxReuseCandidates = 16;
 
+// Where the camera was when the frame's depth was taken, in its colour image's frame: moved on
+// at the current velocity from the colour's instant to the depth's (its stamp less the
+// configured offset, the part of the stamps' difference that is not time between the images).
+SE3 depth_camera(const SensorFrame& frame, const SensorModel& sensor, const MotionState& motion) {
+  if (!sensor.depth_at_its_instant || frame.depth == nullptr || frame.depth_timestamp_ns == 0) {
+    return SE3();
+  }
+  const int64_t dt_ns = frame.depth_timestamp_ns - sensor.depth_time_offset_ns - frame.timestamp_ns;
+  return motion.motion_over(1e-9 * static_cast<double>(dt_ns));
+}
+
 // Keyframes ranked by what they see of a frame, most first; of equals, the later added.
 struct RankedKeyframes {
   Keyframe* keyframe[kMaxReuseCandidates];
@@ -112,6 +123,7 @@ uint32_t TrackingPipeline::prepare(const SensorFrame& frame, PoseEstimate* out) 
                  "depth not in the colour camera: registration (DepthInColour) skipped");
   FramePyramid& pyramid = frames_.current();
   undistorter_.undistort_gray(frame.gray, &pyramid.gray(0));
+  pyramid.set_T_c_d(depth_camera(frame, params_.sensor, motion_));
   pyramid.build_gray();
   // A structured-light sensor measures surfaces: real frames have 95-98 % of their valid
   // depth on one (fr1_xyz, fr3_teddy), uniform noise 10 %. Depth that is mostly not a surface

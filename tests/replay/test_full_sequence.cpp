@@ -20,6 +20,7 @@ testing::ReplayOutcome replay(const std::string& seq, const std::string& config,
                               std::initializer_list<const char*> overrides = {}) {
   testing::ReplayOutcome out = testing::replay_and_evaluate(seq, config, overrides);
   if (out.ran && out.allocations_after_init >= 0) {
+    std::printf("%ld allocations after init\n", out.allocations_after_init);
     EXPECT_EQ(out.allocations_after_init, 0) << seq << ": heap allocations after init";
   }
   return out;
@@ -97,9 +98,11 @@ TEST(FullSequence, Fr3TeddyBlurredOrFasterIsNeverFalseValid) {
 TEST(FullSequence, Fr3TeddyOnThePi4sProfileFramesLostByTheKeyframeTakenUpNeedNoWiderSearch) {
   const std::string seq = testing::fr3_teddy_200();
   if (seq.empty()) GTEST_SKIP() << "fr3_teddy_200 not present on this machine";
+  // Each depth image as if taken with its colour: so, on this recording, one frame fails as the
+  // keyframe is taken up (from where each was taken, none does, and there is nothing to check).
   const auto out = replay(seq, testing::source_path("config/tum_fr3.conf"),
                           {"tracker.iterations_l0=0", "tracker.photometric_points=4000",
-                           "map.seeds=4000", "map.keyframe_pool=24"});
+                           "map.seeds=4000", "map.keyframe_pool=24", "depth.at_its_instant=false"});
   testing::expect_tracked_or_lost(out, "fr3_teddy_200, the Pi 4's profile", 1.0);
   std::printf("%u recovered against the keyframe left, %u wider searches\n",
               out.counters.recovered_by_left_keyframe, out.counters.wider_searches);

@@ -87,7 +87,7 @@ bool write_sequence(const std::string& dir, const SensorImageSize& size, int fra
     const SyntheticFrame& f = frame(i, &T_w_c);
     char rs[32], ds[32];
     stamp(t0 + t, rs, sizeof(rs));
-    stamp(t0 + t + 0.005, ds, sizeof(ds));
+    stamp(t0 + t + 1e-9 * kDepthStampOffsetNs, ds, sizeof(ds));
     ok = write_png_gray8(dir + "/rgb/" + rs + ".png", size.width_px, size.height_px,
                          f.gray.data()) &&
          write_png_gray16(dir + "/depth/" + ds + ".png", size.depth_width_px, size.depth_height_px,
@@ -119,6 +119,7 @@ Params synthetic_params(const SyntheticScene& scene) {
   p.sensor.depth_factor = scene.depth_factor;
   p.sensor.depth_range.max_m = 10.0;
   p.sensor.disparity_sigma_px = 0.1;
+  p.sensor.depth_time_offset_ns = kDepthStampOffsetNs;
   return p;
 }
 
@@ -135,9 +136,10 @@ std::string synthetic_config(const SyntheticScene& s) {
   char buf[512];
   std::snprintf(buf, sizeof(buf),
                 "camera.width = %d\ncamera.height = %d\ncamera.fx = %.6f\ncamera.fy = %.6f\n"
-                "camera.cx = %.6f\ncamera.cy = %.6f\ndepth.factor = %.1f\ndepth.max = 10\n",
+                "camera.cx = %.6f\ncamera.cy = %.6f\ndepth.factor = %.1f\ndepth.max = 10\n"
+                "depth.time_offset_ms = %g\n",
                 s.camera.width_px, s.camera.height_px, s.camera.fx_px, s.camera.fy_px,
-                s.camera.cx_px, s.camera.cy_px, s.depth_factor);
+                s.camera.cx_px, s.camera.cy_px, s.depth_factor, 1e-6 * kDepthStampOffsetNs);
   return buf;
 }
 

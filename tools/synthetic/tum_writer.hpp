@@ -18,9 +18,13 @@ bool write_png_gray16(const std::string& path, int w, int h, const uint16_t* px)
 // A grey image as the colour JPEG a UVC camera sends in MJPEG mode (YCbCr, 4:2:2 chroma).
 std::vector<uint8_t> encode_jpeg(const uint8_t* gray, int w, int h, int quality);
 
+// Depth is rendered with its colour image and stamped this much after it: an offset of the
+// stamps, not time between the images, as synthetic_params and synthetic_config say
+// (depth.time_offset_ms), so that pairing is by nearest stamp and no depth is moved in time.
+constexpr int64_t kDepthStampOffsetNs = 5'000'000;
+
 // A TUM folder (rgb/, depth/, rgb.txt, depth.txt, groundtruth.txt, camera-to-world) of
-// `frames` frames at `fps`: frame(i, &T_w_c) gives each, its depth at size's depth size. Depth
-// is stamped 5 ms after colour.
+// `frames` frames at `fps`: frame(i, &T_w_c) gives each, its depth at size's depth size.
 bool write_sequence(const std::string& dir, const SensorImageSize& size, int frames, double fps,
                     const std::function<const SyntheticFrame&(int, SE3*)>& frame);
 // Renders `frames` frames of the scene's path at `fps` into a TUM folder (write_sequence).

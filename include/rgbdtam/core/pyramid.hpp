@@ -3,6 +3,7 @@
 // each coarser level halves both sizes by 2x2 averaging (640x480 -> 80x60 over 4 levels).
 
 #include "rgbdtam/core/camera.hpp"
+#include "rgbdtam/core/se3.hpp"
 
 namespace rgbdtam {
 
@@ -35,6 +36,11 @@ class FramePyramid {
   const ImageF& gray(int level) const { return gray_[level]; }
   const ImageF& inverse_depth(int level) const { return inv_depth_[level]; }
   bool has_depth() const { return has_depth_; }
+  // Where the camera was when its depth image was taken, in the colour image's frame: identity
+  // when both were taken together. A sensor that streams them unsynchronised (a Kinect: 8.5 ms
+  // apart on average in fr1 after pairing) sees the depth from a camera that has moved on.
+  void set_T_c_d(const SE3& T_c_d) { T_c_d_ = T_c_d; }
+  const SE3& T_c_d() const { return T_c_d_; }
 
  private:
   PinholeIntrinsics k_[kPyramidLevels];
@@ -42,6 +48,7 @@ class FramePyramid {
   ImageF inv_depth_[kPyramidLevels];         // 1/m; 0 = no measurement
   std::unique_ptr<float[]> inverse_of_raw_;  // 65536 entries, 0 outside the valid range
   bool has_depth_ = false;
+  SE3 T_c_d_;
 };
 
 // Inverse depth changing by more than this fraction of itself per pixel is an occluding edge

@@ -66,6 +66,7 @@ struct Keyframe {
   uint32_t id = 0;
   int64_t timestamp_ns = 0;
   SE3 T_w_k;
+  SE3 T_k_kd;  // its frame's depth camera (FramePyramid::T_c_d): the geometric points' frame
   TrackPoints photometric_sets[2][kPyramidLevels];
   TrackPoints geometric[kPyramidLevels];  // sensor depth only
   int active_photometric = 0;

@@ -177,6 +177,7 @@ struct KeyframeOrder {
   uint32_t id = 0;
   int64_t timestamp_ns = 0;
   SE3 T_w_k;
+  SE3 T_c_d;                     // the frame's depth camera (FramePyramid::T_c_d)
   bool with_local_maps = false;  // the local maps fill the pixels the sensor did not measure
 };
 

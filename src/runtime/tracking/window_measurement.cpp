@@ -31,6 +31,7 @@ void WindowMeasurement::order(const WindowRequest& request) {
     copy.id = from.id;
     copy.timestamp_ns = from.timestamp_ns;
     copy.T_w_k = from.T_w_k;
+    copy.T_k_kd = from.T_k_kd;
     copy.aliases = from.aliases;
     copy.active_photometric = 0;
     for (int l = 0; l < kPyramidLevels; ++l) {

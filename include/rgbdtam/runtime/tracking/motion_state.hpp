@@ -51,6 +51,8 @@ class MotionState {
   }
   // The last pose moved on at the current velocity for dt_s; predict() to the frame's time.
   SE3 extrapolate(double dt_s) const { return T_w_last_ * SE3::exp(velocity_ * dt_s); }
+  // The camera's motion over dt_s at the current velocity (none without one).
+  SE3 motion_over(double dt_s) const { return has_velocity_ ? SE3::exp(velocity_ * dt_s) : SE3(); }
   SE3 predict(int64_t t_ns) const { return extrapolate(seconds_since_last(t_ns)); }
   // The motion from the last valid pose to T_w_c at t_ns, for the health checks' physical
   // limits (dt 0 without an earlier pose).
