@@ -62,12 +62,7 @@ void KeyframeBuildTask::step(const KeyframeOrder& order) {
 
 void KeyframeBuildTask::hand_over(Keyframe* kf) {
   RGBDTAM_ASSERT(built(), "a keyframe is handed over before it is built");
-  kf->id = keyframe_.id;
-  kf->timestamp_ns = keyframe_.timestamp_ns;
-  kf->T_w_k = keyframe_.T_w_k;
-  kf->T_k_kd = keyframe_.T_k_kd;
-  kf->aliases = keyframe_.aliases;
-  kf->active_photometric = 0;
+  kf->take_header_of(keyframe_);
   // Swapped, not copied: the slot's old buffers are the next build's.
   for (int l = 0; l < kPyramidLevels; ++l) {
     kf->photometric_sets[0][l].swap(keyframe_.photometric_sets[0][l]);

@@ -21,6 +21,25 @@ using testing::kDeg;
 // 15 ms of a brisk hand-held motion (0.7 m/s, 40 deg/s): where the depth camera was.
 const SE3 kT_c_d(so3_exp(Vector3d(0.4, -0.3, 0.3) * kDeg), Vector3d(0.008, -0.004, 0.006));
 
+// A tracked pose's error against the truth.
+struct PoseError {
+  double m = 0.0, rad = 0.0;
+};
+
+// Tracked from where the depth was taken, the pose is the colour image's; read as if taken with
+// its colour, it is not (or the test would show nothing).
+void expect_tracked_where_taken(const char* whose, const PoseError& as_if_together,
+                                const PoseError& at_its_instant) {
+  std::printf(
+      "pose error %.2f mm %.3f deg with %s depth as if taken with its colour, %.2f mm "
+      "%.3f deg from where it was taken\n",
+      1e3 * as_if_together.m, as_if_together.rad / kDeg, whose, 1e3 * at_its_instant.m,
+      at_its_instant.rad / kDeg);
+  EXPECT_LT(at_its_instant.m, 0.001);
+  EXPECT_LT(at_its_instant.rad, 0.05 * kDeg);
+  EXPECT_LT(at_its_instant.m, 0.3 * as_if_together.m) << "the test shows nothing";
+}
+
 class DepthInstant : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -41,13 +60,11 @@ class DepthInstant : public ::testing::Test {
     out->build_inverse_depth_levels();
   }
 
-  // The tracked pose's error against the truth, in metres and radians.
-  void track_error(const FramePyramid& frame, const SE3& T_k_c, double* metres, double* rad) {
+  PoseError track_error(const FramePyramid& frame, const SE3& T_k_c) {
     tracker_.allocate(kf_, p_.tracker);
     const TrackResult r = tracker_.track(kf_, frame, SE3(), scales_);
     const SE3 error = T_k_c.inverse() * r.T_k_c;
-    *metres = error.translation().norm();
-    *rad = so3_log(error.quaternion()).norm();
+    return {error.translation().norm(), so3_log(error.quaternion()).norm()};
   }
 
   const testing::SyntheticScene room_ = testing::SyntheticScene::half_resolution();
@@ -65,18 +82,9 @@ TEST_F(DepthInstant, TheFramesLateDepthIsTrackedFromWhereItWasTaken) {
   const SE3 T_k_c(so3_exp(Vector3d(0.0, 1.0, 0.0) * kDeg), Vector3d(0.03, 0.0, 0.01));
   FramePyramid frame;
   render(T_k_c, kT_c_d, &frame);
-  double as_if_together_m, as_if_together_rad, at_its_instant_m, at_its_instant_rad;
-  track_error(frame, T_k_c, &as_if_together_m, &as_if_together_rad);
+  const PoseError as_if_together = track_error(frame, T_k_c);
   frame.set_T_c_d(kT_c_d);
-  track_error(frame, T_k_c, &at_its_instant_m, &at_its_instant_rad);
-  std::printf(
-      "pose error %.2f mm %.3f deg with the depth as if taken with the colour, %.2f mm "
-      "%.3f deg from where it was taken\n",
-      1e3 * as_if_together_m, as_if_together_rad / kDeg, 1e3 * at_its_instant_m,
-      at_its_instant_rad / kDeg);
-  EXPECT_LT(at_its_instant_m, 0.001);
-  EXPECT_LT(at_its_instant_rad, 0.05 * kDeg);
-  EXPECT_LT(at_its_instant_m, 0.3 * as_if_together_m) << "the test shows nothing";
+  expect_tracked_where_taken("the frame's", as_if_together, track_error(frame, T_k_c));
 }
 
 TEST_F(DepthInstant, TheKeyframesLateDepthIsTrackedFromWhereItWasTaken) {
@@ -88,19 +96,9 @@ TEST_F(DepthInstant, TheKeyframesLateDepthIsTrackedFromWhereItWasTaken) {
   const SE3 T_k_c(so3_exp(Vector3d(0.0, 1.0, 0.0) * kDeg), Vector3d(0.03, 0.0, 0.01));
   FramePyramid frame;
   testing::synthetic_pyramid(room_.render(T_k_c), p_, &frame);
-  double at_its_instant_m, at_its_instant_rad;
-  track_error(frame, T_k_c, &at_its_instant_m, &at_its_instant_rad);
+  const PoseError at_its_instant = track_error(frame, T_k_c);
   kf_.T_k_kd = SE3();
-  double as_if_together_m, as_if_together_rad;
-  track_error(frame, T_k_c, &as_if_together_m, &as_if_together_rad);
-  std::printf(
-      "pose error %.2f mm %.3f deg with the keyframe's depth as if taken with its "
-      "colour, %.2f mm %.3f deg from where it was taken\n",
-      1e3 * as_if_together_m, as_if_together_rad / kDeg, 1e3 * at_its_instant_m,
-      at_its_instant_rad / kDeg);
-  EXPECT_LT(at_its_instant_m, 0.001);
-  EXPECT_LT(at_its_instant_rad, 0.05 * kDeg);
-  EXPECT_LT(at_its_instant_m, 0.3 * as_if_together_m) << "the test shows nothing";
+  expect_tracked_where_taken("the keyframe's", track_error(frame, T_k_c), at_its_instant);
 }
 
 TEST_F(DepthInstant, ADepthPoseIsForgottenWithTheDepth) {

@@ -78,6 +78,16 @@ struct Keyframe {
   }
   TrackPoints* inactive_photometric() { return photometric_sets[1 - active_photometric]; }
   void swap_photometric() { active_photometric = 1 - active_photometric; }
+  // Everything but the points (and the mapper's map), which the callers move or copy themselves;
+  // the points then go to the first photometric set.
+  void take_header_of(const Keyframe& from) {
+    id = from.id;
+    timestamp_ns = from.timestamp_ns;
+    T_w_k = from.T_w_k;
+    T_k_kd = from.T_k_kd;
+    aliases = from.aliases;
+    active_photometric = 0;
+  }
 };
 
 // Selects a keyframe's residual points; owns its scratch images.

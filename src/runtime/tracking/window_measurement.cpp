@@ -28,12 +28,7 @@ void WindowMeasurement::order(const WindowRequest& request) {
   for (int i = 0; i < request.count; ++i) {
     const Keyframe& from = *request.references[i];
     Keyframe& copy = references_[i];
-    copy.id = from.id;
-    copy.timestamp_ns = from.timestamp_ns;
-    copy.T_w_k = from.T_w_k;
-    copy.T_k_kd = from.T_k_kd;
-    copy.aliases = from.aliases;
-    copy.active_photometric = 0;
+    copy.take_header_of(from);
     for (int l = 0; l < kPyramidLevels; ++l) {
       copy.photometric_sets[0][l].copy_from(from.photometric(l));
       copy.geometric[l].copy_from(from.geometric[l]);
