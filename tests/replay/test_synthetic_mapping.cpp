@@ -5,10 +5,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <atomic>
-#include <chrono>
 #include <cmath>
-#include <thread>
+#include <condition_variable>
+#include <mutex>
 #include <vector>
 
 #include "rgbdtam/core/canny.hpp"
@@ -140,14 +139,29 @@ TEST(SyntheticMapping, FarWallBeyondSensorRangeIsMappedAndTrackingContinuesOnIt)
               worst_m * 1e3, worst_without_box_m * 1e3, frames_without_box);
 }
 
-// Stalls the mapper's thread at its first finished keyframe, as a board too slow for it would.
+// Stalls the mapper's thread at its first finished keyframe, as a board too slow for it would,
+// until the test releases it: the frames sent meanwhile back up in the mapper's queue whatever
+// the scheduler does.
 class StallingSink : public MapSink {
  public:
   void on_keyframe_map(int64_t, const SE3&, const PinholeIntrinsics&,
                        const FixedVector<FusedPixel>&) override {
-    if (maps_++ == 0) std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    std::unique_lock<std::mutex> lock(mutex_);
+    if (maps_++ == 0) released_changed_.wait(lock, [this] { return released_; });
   }
-  std::atomic<int> maps_{0};
+  void release() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      released_ = true;
+    }
+    released_changed_.notify_all();
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable released_changed_;
+  bool released_ = false;
+  int maps_ = 0;
 };
 
 TEST(SyntheticMapping, AMapperBehindSkipsFramesToCatchUpAndTheTrackerNeverWaits) {
@@ -157,6 +171,9 @@ TEST(SyntheticMapping, AMapperBehindSkipsFramesToCatchUpAndTheTrackerNeverWaits)
   p.map_enabled = true;
   p.map_threaded = true;
   p.map_frames_per_keyframe = 2;  // the first map, and the stall, come early
+  // Released, the mapper finds seven frames behind the one it stalled on: it is late (half its
+  // queue or more waiting) for the next four, at most one of which can be a keyframe's.
+  p.map_queue_frames = 8;
   StallingSink sink;
   SlamSystem slam;
   ASSERT_TRUE(slam.init(p, monotonic_ns, &sink).is_ok());
@@ -168,9 +185,11 @@ TEST(SyntheticMapping, AMapperBehindSkipsFramesToCatchUpAndTheTrackerNeverWaits)
     const PoseEstimate pose =
         slam.process(frames[static_cast<size_t>(i)].as_sensor_frame(scene.camera, i, kFps));
     tracked += (pose.flags & kPoseValid) != 0 ? 1 : 0;
-    // Frames at a tenth of their real period: the stalled mapper falls far behind.
-    std::this_thread::sleep_for(std::chrono::milliseconds(i == 0 ? 50 : 3));
   }
+  // Every frame was tracked while the mapper stalled: its first map comes within the first
+  // twenty frames, and the rest fill its queue (or, had its thread not yet run, the first ones
+  // do), so it now finds its queue full and catches up.
+  sink.release();
   slam.finish();
   const MappingCounters& m = slam.mapper().counters();
   const TrackingCounters& c = slam.tracking().counters();
