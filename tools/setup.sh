@@ -37,8 +37,9 @@ if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 # libjpeg62-turbo-dev: MJPEG colour from UVC cameras (libjpeg-turbo's static libjpeg.a);
 # libmicrohttpd-dev: the monitor's live page.
 # liboctomap-dev: rgbdtam-octomap (host only); octomap-tools: OctoMap's own tools open its files.
+# libgtest-dev: GoogleTest's library for host builds; googletest: its source for cross builds.
 packages=(build-essential cmake ninja-build libeigen3-dev libpng-dev zlib1g-dev libgpiod-dev
-  googletest file python3-open3d libfreenect-dev libopenni2-dev libjpeg62-turbo-dev libmicrohttpd-dev
+  googletest libgtest-dev file python3-open3d libfreenect-dev libopenni2-dev libjpeg62-turbo-dev libmicrohttpd-dev
   liboctomap-dev octomap-tools)
 # tools/mavlink-check decodes the link with node-mavlink and drives Chromium with
 # playwright-core (both pinned in its lockfile). A Node that is already there (with its npm) is
@@ -78,8 +79,9 @@ if $aarch64 && [ ! -f .sysroot/arm64/usr/lib/aarch64-linux-gnu/libjpeg.a ]; then
   for deb in "$work"/*.deb; do dpkg-deb -x "$deb" .sysroot/arm64; done
   rm -rf "$work"
 fi
-tools/build_kinect_libs.sh x86_64-linux-gnu
-if $aarch64; then tools/build_kinect_libs.sh aarch64-linux-gnu; fi
+kinect_triplets=(x86_64-linux-gnu)
+if $aarch64; then kinect_triplets+=(aarch64-linux-gnu); fi
+tools/build_kinect_libs.sh "${kinect_triplets[@]}"
 if [ ! -d tools/mavlink-check/node_modules/node-mavlink ] ||
   [ ! -d tools/mavlink-check/node_modules/playwright-core ]; then
   echo "setup: installing node-mavlink and playwright-core for tools/mavlink-check (npm ci, from its lockfile)"
