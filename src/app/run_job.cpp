@@ -98,7 +98,8 @@ Status open_freenect(const Board& board, BoardSensor* sensor) {
   const FreenectDepth mode = std::strcmp(board.sensor_depth, "raw") == 0
                                  ? FreenectDepth::kRaw
                                  : FreenectDepth::kRegistered;
-  // libfreenect does not document its timestamp unit: the latest of each stream pair up.
+  // The latest of each stream pair up, whatever their stamps' distance (it is kept: the depth is
+  // tracked from its own instant).
   RGBDTAM_RETURN_IF_ERROR(sensor->freenect.open(kFreenectUsbDriver, std::atoi(board.sensor_device),
                                                 mode, UINT32_MAX / 2));
   sensor->live = &sensor->freenect;

@@ -41,6 +41,9 @@ void video_callback(freenect_device* dev, void* data, uint32_t ticks) {
   static_cast<FreenectSource*>(driver.get_user(dev))->on_video(data, ticks);
 }
 constexpr uint16_t kRawNoData = 2047;
+// Both streams are stamped by the device's 60 MHz clock (libfreenect's own OpenNI2 driver divides
+// its stamps by 60 for microseconds): 50 ns every three ticks.
+constexpr int64_t kNsPerThreeTicks = 50;
 // A frame pair takes many USB transfers: the event loop turns until one is complete, for at
 // most this long (a silent device is then an error the stall recovery sees).
 constexpr int64_t kFrameTimeoutNs = 1'000'000'000;
@@ -153,11 +156,14 @@ Status FreenectSource::next(SensorFrame* frame, Status* warning) {
       return Status::error(StatusCode::kEndOfStream, "libfreenect: the stream ended");
     }
     if (!have_depth_ || !have_video_) continue;
-    const uint32_t gap =
-        depth_ticks_ > colour_ticks_ ? depth_ticks_ - colour_ticks_ : colour_ticks_ - depth_ticks_;
+    // Modulo 2^32: the clock wraps every 71.6 s.
+    const int32_t depth_after_colour_ticks = static_cast<int32_t>(depth_ticks_ - colour_ticks_);
+    const uint32_t gap = depth_after_colour_ticks < 0
+                             ? 0u - static_cast<uint32_t>(depth_after_colour_ticks)
+                             : static_cast<uint32_t>(depth_after_colour_ticks);
     if (gap > max_pair_ticks_) {
       // The older one waits for a newer partner.
-      if (depth_ticks_ < colour_ticks_)
+      if (depth_after_colour_ticks < 0)
         have_depth_ = false;
       else
         have_video_ = false;
@@ -166,7 +172,9 @@ Status FreenectSource::next(SensorFrame* frame, Status* warning) {
     arrival_ns_ = monotonic_ns();
     frame->sequence = sequence_++;
     frame->timestamp_ns = arrival_ns_;
-    frame->depth_timestamp_ns = frame->timestamp_ns;
+    // The depth keeps its own instant: depth.at_its_instant tracks it from where the camera was.
+    frame->depth_timestamp_ns =
+        frame->timestamp_ns + depth_after_colour_ticks * kNsPerThreeTicks / 3;
     frame->gray = gray_.data();
     frame->depth = depth_.data();
     frame->width_px = frame->depth_width_px = kWidth;

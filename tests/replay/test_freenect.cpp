@@ -110,6 +110,8 @@ TEST(Freenect, FakenectDumpFramesValuesAndTimestampsArriveExactly) {
     ASSERT_TRUE(s.is_ok()) << "frame " << f << ": " << s.message();
     EXPECT_EQ(source->depth_device_timestamp(), frames[f].depth_ticks);
     EXPECT_EQ(source->colour_device_timestamp(), frames[f].video_ticks);
+    EXPECT_EQ(out.depth_timestamp_ns - out.timestamp_ns, -5000)
+        << "the depth 300 ticks of the 60 MHz clock before the colour";
     int gray_mismatch = 0, depth_mismatch = 0;
     for (int i = 0; i < kW * kH; ++i) {
       gray_mismatch += out.gray[i] != frames[f].gray[i];
@@ -119,6 +121,32 @@ TEST(Freenect, FakenectDumpFramesValuesAndTimestampsArriveExactly) {
     EXPECT_EQ(depth_mismatch, 0) << "frame " << f;
     EXPECT_EQ(out.depth[f], 0) << "2047 is no data";
   }
+}
+
+// The device clock's 32 bits wrap every 71.6 s: a pair on either side of the wrap is a pair (it
+// was taken for two frames 71.6 s apart, and a frame was lost), and the depth keeps its instant.
+TEST(Freenect, APairAcrossTheClocksWrapIsAPair) {
+  const std::string dir = testing::make_temp_dir("fakenect_wrap");
+  std::vector<DumpFrame> frames(3);
+  for (int f = 0; f < 3; ++f) {
+    frames[f].gray.assign(kW * kH, static_cast<uint8_t>(10 * f + 1));
+    frames[f].raw.assign(kW * kH, static_cast<uint16_t>(600 + f));
+    // Frame 1's depth is stamped 256 ticks before the wrap, its colour 344 after.
+    frames[f].video_ticks = 344u + 2000000u * static_cast<uint32_t>(f) - 2000000u;
+    frames[f].depth_ticks = frames[f].video_ticks - 600u;
+  }
+  write_dump(dir, frames);
+  std::unique_ptr<FreenectSource> source(open_dump(dir));
+  for (int f = 0; f < 3; ++f) {
+    SensorFrame out;
+    Status warning;
+    const Status s = source->next(&out, &warning);
+    ASSERT_TRUE(s.is_ok()) << "frame " << f << ": " << s.message();
+    EXPECT_EQ(source->depth_device_timestamp(), frames[f].depth_ticks) << "frame " << f;
+    EXPECT_EQ(out.gray[0], frames[f].gray[0]) << "frame " << f;
+    EXPECT_EQ(out.depth_timestamp_ns - out.timestamp_ns, -10000) << "frame " << f;
+  }
+  EXPECT_EQ(source->dropped(), 0u);
 }
 
 // Each way a dump can be damaged is an error naming its INDEX line, before fakenect (which would
