@@ -209,16 +209,35 @@ TEST_F(MapFile, AWriterKilledAtAnyInstantLeavesAMapThatLoads) {
   const auto write_us =
       std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - t0)
           .count();
+  // The first kill comes before the writer starts and the second after its first write, so
+  // both maps are seen whatever the scheduler does; the others at random instants.
   int old_map = 0, new_map = 0;
   for (int i = 0; i < 60; ++i) {
     write_bytes(map_, first_map);
+    int start[2], written[2];
+    ASSERT_EQ(pipe(start), 0);
+    ASSERT_EQ(pipe(written), 0);
     const pid_t child = fork();
     ASSERT_GE(child, 0);
     if (child == 0) {
-      for (;;) (void)save_map_file(map_.c_str(), job->system(), "test");
+      char go = 0;
+      if (read(start[0], &go, 1) != 1) _exit(1);
+      for (;;) {
+        (void)save_map_file(map_.c_str(), job->system(), "test");
+        if (write(written[1], "w", 1) != 1) _exit(1);
+      }
     }
-    usleep(static_cast<useconds_t>(random() % (3 * write_us + 1)));
+    if (i > 0) {
+      ASSERT_EQ(write(start[1], "g", 1), 1);
+    }
+    if (i == 1) {
+      char done = 0;
+      ASSERT_EQ(read(written[0], &done, 1), 1);
+    } else if (i > 1) {
+      usleep(static_cast<useconds_t>(random() % (3 * write_us + 1)));
+    }
     kill(child, SIGKILL);
+    for (int fd : {start[0], start[1], written[0], written[1]}) close(fd);
     int status = 0;
     waitpid(child, &status, 0);
     // Whole, by its checksum: one of the two maps, never a mixture or a part.
