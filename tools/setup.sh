@@ -39,8 +39,8 @@ if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 # liboctomap-dev: rgbdtam-octomap (host only); octomap-tools: OctoMap's own tools open its files.
 # libgtest-dev: GoogleTest's library for host builds; googletest: its source for cross builds.
 packages=(build-essential cmake ninja-build libeigen3-dev libpng-dev zlib1g-dev libgpiod-dev
-  googletest libgtest-dev file python3-open3d libfreenect-dev libopenni2-dev libjpeg62-turbo-dev libmicrohttpd-dev
-  liboctomap-dev octomap-tools)
+  googletest libgtest-dev file python3-open3d libfreenect-dev libopenni2-dev libjpeg62-turbo-dev
+  libmicrohttpd-dev liboctomap-dev octomap-tools)
 # tools/mavlink-check decodes the link with node-mavlink and drives Chromium with
 # playwright-core (both pinned in its lockfile). A Node that is already there (with its npm) is
 # used as it is.
