@@ -79,6 +79,21 @@ uint16_t raw_of(double z_m) {
   return static_cast<uint16_t>(raw < 0 ? 0 : raw > 2046 ? 2047 : raw);
 }
 
+// Frames of one grey level and one disparity each, 2 000 000 ticks apart (33 ms), each colour
+// the given ticks after its depth (modulo 2^32, as the device's clock).
+std::vector<DumpFrame> plain_frames(int count, uint32_t first_depth_ticks,
+                                    uint32_t colour_after_depth_ticks) {
+  std::vector<DumpFrame> frames(static_cast<size_t>(count));
+  for (int f = 0; f < count; ++f) {
+    DumpFrame& frame = frames[static_cast<size_t>(f)];
+    frame.gray.assign(kW * kH, static_cast<uint8_t>(10 * f + 1));
+    frame.raw.assign(kW * kH, static_cast<uint16_t>(600 + f));
+    frame.depth_ticks = first_depth_ticks + 2000000u * static_cast<uint32_t>(f);
+    frame.video_ticks = frame.depth_ticks + colour_after_depth_ticks;
+  }
+  return frames;
+}
+
 FreenectSource* open_dump(const std::string& dir) {
   setenv("FAKENECT_PATH", dir.c_str(), 1);
   auto* source = new FreenectSource;
@@ -127,14 +142,8 @@ TEST(Freenect, FakenectDumpFramesValuesAndTimestampsArriveExactly) {
 // was taken for two frames 71.6 s apart, and a frame was lost), and the depth keeps its instant.
 TEST(Freenect, APairAcrossTheClocksWrapIsAPair) {
   const std::string dir = testing::make_temp_dir("fakenect_wrap");
-  std::vector<DumpFrame> frames(3);
-  for (int f = 0; f < 3; ++f) {
-    frames[f].gray.assign(kW * kH, static_cast<uint8_t>(10 * f + 1));
-    frames[f].raw.assign(kW * kH, static_cast<uint16_t>(600 + f));
-    // Frame 1's depth is stamped 256 ticks before the wrap, its colour 344 after.
-    frames[f].video_ticks = 344u + 2000000u * static_cast<uint32_t>(f) - 2000000u;
-    frames[f].depth_ticks = frames[f].video_ticks - 600u;
-  }
+  // Frame 1's depth is stamped 256 ticks before the wrap, its colour 344 after.
+  const std::vector<DumpFrame> frames = plain_frames(3, 0u - 256u - 2000000u, 600);
   write_dump(dir, frames);
   std::unique_ptr<FreenectSource> source(open_dump(dir));
   for (int f = 0; f < 3; ++f) {
@@ -192,13 +201,7 @@ TEST(Freenect, ADamagedDumpIsAnErrorNamingTheLineBeforeFakenectPlaysIt) {
 
 TEST(Freenect, AReopenedDeviceDeliversFramesAgain) {
   const std::string dir = testing::make_temp_dir("fakenect_reopen");
-  std::vector<DumpFrame> frames(3);
-  for (int f = 0; f < 3; ++f) {
-    frames[f].gray.assign(kW * kH, static_cast<uint8_t>(10 * f + 1));
-    frames[f].raw.assign(kW * kH, static_cast<uint16_t>(600 + f));
-    frames[f].depth_ticks = 1000000u + 2000000u * static_cast<uint32_t>(f);
-    frames[f].video_ticks = frames[f].depth_ticks + 300;
-  }
+  const std::vector<DumpFrame> frames = plain_frames(3, 1000000u, 300);
   write_dump(dir, frames);
   std::unique_ptr<FreenectSource> source(open_dump(dir));
   SensorFrame out;
