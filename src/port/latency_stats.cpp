@@ -19,12 +19,13 @@ void LatencyStats::add(int64_t ns) {
 
 double LatencyStats::percentile_ms(double p) const {
   if (count_ == 0) return 0.0;
-  // Nearest-rank percentile, reported at the bin centre.
+  // Nearest-rank percentile, reported at the bin centre, but never above the largest sample
+  // (which may lie in the bin's lower half: the monitor showed a p95 above the max).
   const int64_t rank = std::max<int64_t>(1, static_cast<int64_t>(std::ceil(p * count_)));
   int64_t seen = 0;
   for (int i = 0; i < kBins; ++i) {
     seen += bins_[i];
-    if (seen >= rank) return (static_cast<double>(i) + 0.5) * kBinNs * 1e-6;
+    if (seen >= rank) return std::min((static_cast<double>(i) + 0.5) * kBinNs * 1e-6, max_ms());
   }
   return max_ms();
 }
