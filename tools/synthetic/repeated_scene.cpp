@@ -28,6 +28,8 @@ struct Box {
 struct GreyHit {
   double t = kInf;  // along a ray whose direction has unit camera z: the camera depth
   double grey = 0.0;
+  // The wall and the floor are shaded once they are known to be the nearest.
+  enum class Surface { kBox, kWall, kFloor } surface = Surface::kBox;
 };
 
 // The ray o + t d enters the box at t (slab method); false when it misses or starts inside.
@@ -51,10 +53,37 @@ bool enters(const Box& b, const Vector3d& o, const Vector3d& d, double* t) {
 // Grout or seam lines of width w_m every period_m, at coordinate u.
 bool on_line(double u, double period_m, double w_m) { return frac(u / period_m) * period_m < w_m; }
 
+double lateral_position(const RepeatedScene& s, double t) {
+  // Speed swings between min_step and max_step per frame every 4 s: x is its integral.
+  const double w = 2.0 * M_PI / 4.0;
+  const double a = s.min_step_m * s.fps, b = (s.max_step_m - s.min_step_m) * s.fps;
+  return a * t + 0.5 * b * (t - std::sin(w * t) / w);
+}
+
+// Whether any ray through the image (a pixel's margin around it) can enter the box: false only
+// when all its corners are in front of the camera and their image lies beside the image.
+bool may_be_seen(const Box& b, const SE3& T_w_c, const PinholeIntrinsics& k) {
+  const SE3 T_c_w = T_w_c.inverse();
+  double u_lo = kInf, u_hi = -kInf, v_lo = kInf, v_hi = -kInf;
+  for (int corner = 0; corner < 8; ++corner) {
+    const Vector3d w((corner & 1) ? b.hi.x() : b.lo.x(), (corner & 2) ? b.hi.y() : b.lo.y(),
+                     (corner & 4) ? b.hi.z() : b.lo.z());
+    const Vector3d c = T_c_w * w;
+    if (c.z() <= 1e-6) return true;
+    const double u = k.fx_px * c.x() / c.z() + k.cx_px, v = k.fy_px * c.y() / c.z() + k.cy_px;
+    u_lo = std::min(u_lo, u);
+    u_hi = std::max(u_hi, u);
+    v_lo = std::min(v_lo, v);
+    v_hi = std::max(v_hi, v);
+  }
+  return u_hi >= -1.0 && u_lo <= k.width_px && v_hi >= -1.0 && v_lo <= k.height_px;
+}
+
 class Renderer {
  public:
-  // Only the structures within reach of a camera at x_m are kept.
-  Renderer(const RepeatedScene& s, double x_m) : s_(s) {
+  // Only the structures within reach that the camera can see are kept (the rays' tests of the
+  // others took a third of the rendering).
+  Renderer(const RepeatedScene& s, const SE3& T_w_c, double t_s) : s_(s) {
     D_ = s.wall_distance_m;
     H_ = 0.7 * D_;  // the camera's height over the floor: the floor fills the image's lower part
     // A few boxes against the wall, far apart and unlike each other: the only things that
@@ -69,27 +98,32 @@ class Renderer {
       b.lo = Vector3d(x, H_ - size * (0.6 + 0.6 * u01(rng)), D_ - size);
       b.hi = Vector3d(x + size * (0.8 + 0.6 * u01(rng)), H_, D_);
       b.grey = 0.3 + 0.45 * u01(rng);
-      if (std::fabs(x - x_m) < 2.0 + 3.0 * D_) structures_.push_back(b);
+      const bool within_reach = std::fabs(x - T_w_c.translation().x()) < 2.0 + 3.0 * D_;
+      if (within_reach && may_be_seen(b, T_w_c, s.camera)) structures_.push_back(b);
     }
+    x_camera_at_enter_ = lateral_position(s, 0.33 * kPersonSequenceS);
+    person_seen_ = s.person && may_be_seen(person_at(t_s), T_w_c, s.camera);
   }
 
-  // The nearest surface along the ray, and its grey under the room's light.
-  GreyHit cast(const Vector3d& o, const Vector3d& d, double t_s) const {
+  // The nearest surface along the ray, and with `shade` its grey under the room's light.
+  GreyHit cast(const Vector3d& o, const Vector3d& d, double t_s, bool shade) const {
     GreyHit h;
-    if (d.z() > 1e-9) consider(&h, (D_ - o.z()) / d.z(), wall_grey(o + (D_ - o.z()) / d.z() * d));
+    if (d.z() > 1e-9) consider(&h, (D_ - o.z()) / d.z(), GreyHit::Surface::kWall);
     if (d.y() > 1e-9) {
       const double t = (H_ - o.y()) / d.y();
       const Vector3d p = o + t * d;
-      if (p.z() < D_) consider(&h, t, floor_grey(p));
+      if (p.z() < D_) consider(&h, t, GreyHit::Surface::kFloor);
     }
     for (const Box& b : structures_) consider_box(&h, b, o, d, b.grey);
     if (s_.wall == RepeatedScene::Pattern::kShelving) shelving(&h, o, d);
-    if (s_.person) {
+    if (person_seen_) {
       const Box p = person_at(t_s);
       consider_box(&h, p, o, d, 0.0);
     }
-    if (h.t < kInf) {
+    if (shade && h.t < kInf) {
       const Vector3d p = o + h.t * d;
+      if (h.surface == GreyHit::Surface::kWall) h.grey = wall_grey(p);
+      if (h.surface == GreyHit::Surface::kFloor) h.grey = floor_grey(p);
       // A room light: brighter near the middle of a long stretch, over metres, not periods.
       h.grey *=
           0.94 + 0.06 * std::cos(2.0 * M_PI * p.x() / 7.3) * std::cos(2.0 * M_PI * p.y() / 5.1);
@@ -102,6 +136,13 @@ class Renderer {
     if (t > 1e-6 && t < h->t) {
       h->t = t;
       h->grey = grey;
+      h->surface = GreyHit::Surface::kBox;
+    }
+  }
+  void consider(GreyHit* h, double t, GreyHit::Surface surface) const {
+    if (t > 1e-6 && t < h->t) {
+      h->t = t;
+      h->surface = surface;
     }
   }
   void consider_box(GreyHit* h, const Box& b, const Vector3d& o, const Vector3d& d,
@@ -201,20 +242,14 @@ class Renderer {
 
  public:
   static constexpr double kPersonSequenceS = 5.0;
-  double x_camera_at_enter_ = 0.0;
 
  private:
   const RepeatedScene& s_;
   double D_ = 0.5, H_ = 0.35;
   std::vector<Box> structures_;
+  double x_camera_at_enter_ = 0.0;
+  bool person_seen_ = false;
 };
-
-double lateral_position(const RepeatedScene& s, double t) {
-  // Speed swings between min_step and max_step per frame every 4 s: x is its integral.
-  const double w = 2.0 * M_PI / 4.0;
-  const double a = s.min_step_m * s.fps, b = (s.max_step_m - s.min_step_m) * s.fps;
-  return a * t + 0.5 * b * (t - std::sin(w * t) / w);
-}
 
 // Structured-light depth: disparity noise of 0.1 px quantised to 1/8 px (580 px x 7.5 cm),
 // blobs of missing depth, a shadow beside each jump in depth, and no depth nearer than 0.2 m.
@@ -295,8 +330,7 @@ SE3 RepeatedScene::camera_at(int frame) const {
 SyntheticFrame RepeatedScene::render(int frame) const {
   const double t = frame / fps;
   const SE3 T_w_c = camera_at(frame);
-  Renderer r(*this, T_w_c.translation().x());
-  r.x_camera_at_enter_ = lateral_position(*this, 0.33 * Renderer::kPersonSequenceS);
+  const Renderer r(*this, T_w_c, t);
   const Matrix3d R = T_w_c.rotation();
   const Vector3d o = T_w_c.translation();
   const int w = camera.width_px, h = camera.height_px;
@@ -316,13 +350,13 @@ SyntheticFrame RepeatedScene::render(int frame) const {
             const double px = x - 0.25 + 0.5 * sx, py = y - 0.25 + 0.5 * sy;
             const Vector3d ray((px - camera.cx_px) / camera.fx_px,
                                (py - camera.cy_px) / camera.fy_px, 1.0);
-            grey += 0.25 * r.cast(o, R * ray, t).grey;
+            grey += 0.25 * r.cast(o, R * ray, t, true).grey;
           }
         }
         const Vector3d centre((x - camera.cx_px) / camera.fx_px, (y - camera.cy_px) / camera.fy_px,
                               1.0);
         const size_t i = static_cast<size_t>(y) * w + x;
-        depth_m[i] = r.cast(o, R * centre, t).t;  // unit camera z: t is the depth
+        depth_m[i] = r.cast(o, R * centre, t, false).t;  // unit camera z: t is the depth
         f.gray[i] = static_cast<uint8_t>(std::clamp(std::lround(gain * grey * 255.0), 0L, 255L));
       }
     }
