@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian packages rgbdtam needs. With --aarch64 it also installs the cross
-# toolchain and qemu-user, and unpacks the arm64 static libpng, zlib and libgpiod into .sysroot/arm64
+# toolchain and qemu-user, and unpacks the arm64 static libpng, zlib, libgpiod and GoogleTest into
+# .sysroot/arm64
 # (download only: the host's package set is not changed to multiarch).
 # With --fuzz it installs clang, whose libFuzzer tools/fuzz.sh uses; with --opencv, OpenCV's
 # contrib modules for rgbdtam-vs-opencv; with --browser, Debian's Chromium for the monitor's
@@ -37,9 +38,9 @@ if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 # libjpeg62-turbo-dev: MJPEG colour from UVC cameras (libjpeg-turbo's static libjpeg.a);
 # libmicrohttpd-dev: the monitor's live page.
 # liboctomap-dev: rgbdtam-octomap (host only); octomap-tools: OctoMap's own tools open its files.
-# libgtest-dev: GoogleTest's library for host builds; googletest: its source for cross builds.
+# libgtest-dev: GoogleTest (its arm64 package goes into the sysroot for cross builds).
 packages=(build-essential cmake ninja-build libeigen3-dev libpng-dev zlib1g-dev libgpiod-dev
-  googletest libgtest-dev file python3-open3d libfreenect-dev libopenni2-dev libjpeg62-turbo-dev
+  libgtest-dev file python3-open3d libfreenect-dev libopenni2-dev libjpeg62-turbo-dev
   libmicrohttpd-dev liboctomap-dev octomap-tools)
 # tools/mavlink-check decodes the link with node-mavlink and drives Chromium with
 # playwright-core (both pinned in its lockfile). A Node that is already there (with its npm) is
@@ -64,8 +65,8 @@ fi
 
 # The arm64 sysroot: static libraries for the static firmware, and OpenNI2 with what its
 # shared libraries need for the dynamic one (board radxa-rock-5b).
-if $aarch64 && [ ! -f .sysroot/arm64/usr/lib/aarch64-linux-gnu/libjpeg.a ]; then
-  echo "setup: fetching arm64 libpng, zlib, libgpiod, libjpeg-turbo and OpenNI2 into .sysroot/arm64"
+if $aarch64 && [ ! -f .sysroot/arm64/usr/lib/aarch64-linux-gnu/libgtest.a ]; then
+  echo "setup: fetching arm64 libpng, zlib, libgpiod, libjpeg-turbo, OpenNI2 and GoogleTest into .sysroot/arm64"
   if ! dpkg --print-foreign-architectures | grep -qx arm64; then
     $SUDO dpkg --add-architecture arm64
   fi
@@ -74,7 +75,7 @@ if $aarch64 && [ ! -f .sysroot/arm64/usr/lib/aarch64-linux-gnu/libjpeg.a ]; then
   (cd "$work" && apt-get download -qq libpng-dev:arm64 libpng16-16:arm64 zlib1g-dev:arm64 zlib1g:arm64 \
     libgpiod-dev:arm64 libgpiod2:arm64 libjpeg62-turbo-dev:arm64 \
     libopenni2-dev:arm64 libopenni2-0:arm64 libjpeg62-turbo:arm64 libusb-1.0-0:arm64 \
-    libudev1:arm64 2>/dev/null)
+    libudev1:arm64 libgtest-dev:arm64 2>/dev/null)
   mkdir -p .sysroot/arm64
   for deb in "$work"/*.deb; do dpkg-deb -x "$deb" .sysroot/arm64; done
   rm -rf "$work"
