@@ -102,11 +102,12 @@ class Renderer {
       if (within_reach && may_be_seen(b, T_w_c, s.camera)) structures_.push_back(b);
     }
     x_camera_at_enter_ = lateral_position(s, 0.33 * kPersonSequenceS);
-    person_seen_ = s.person && may_be_seen(person_at(t_s), T_w_c, s.camera);
+    person_ = person_at(t_s);
+    person_seen_ = s.person && may_be_seen(person_, T_w_c, s.camera);
   }
 
   // The nearest surface along the ray, and with `shade` its grey under the room's light.
-  GreyHit cast(const Vector3d& o, const Vector3d& d, double t_s, bool shade) const {
+  GreyHit cast(const Vector3d& o, const Vector3d& d, bool shade) const {
     GreyHit h;
     if (d.z() > 1e-9) consider(&h, (D_ - o.z()) / d.z(), GreyHit::Surface::kWall);
     if (d.y() > 1e-9) {
@@ -116,10 +117,7 @@ class Renderer {
     }
     for (const Box& b : structures_) consider_box(&h, b, o, d, b.grey);
     if (s_.wall == RepeatedScene::Pattern::kShelving) shelving(&h, o, d);
-    if (person_seen_) {
-      const Box p = person_at(t_s);
-      consider_box(&h, p, o, d, 0.0);
-    }
+    if (person_seen_) consider_box(&h, person_, o, d, 0.0);
     if (shade && h.t < kInf) {
       const Vector3d p = o + h.t * d;
       if (h.surface == GreyHit::Surface::kWall) h.grey = wall_grey(p);
@@ -240,14 +238,12 @@ class Renderer {
     return b;
   }
 
- public:
   static constexpr double kPersonSequenceS = 5.0;
-
- private:
   const RepeatedScene& s_;
   double D_ = 0.5, H_ = 0.35;
   std::vector<Box> structures_;
   double x_camera_at_enter_ = 0.0;
+  Box person_;  // where the person is in this frame, and whether the camera can see them
   bool person_seen_ = false;
 };
 
@@ -350,13 +346,13 @@ SyntheticFrame RepeatedScene::render(int frame) const {
             const double px = x - 0.25 + 0.5 * sx, py = y - 0.25 + 0.5 * sy;
             const Vector3d ray((px - camera.cx_px) / camera.fx_px,
                                (py - camera.cy_px) / camera.fy_px, 1.0);
-            grey += 0.25 * r.cast(o, R * ray, t, true).grey;
+            grey += 0.25 * r.cast(o, R * ray, true).grey;
           }
         }
         const Vector3d centre((x - camera.cx_px) / camera.fx_px, (y - camera.cy_px) / camera.fy_px,
                               1.0);
         const size_t i = static_cast<size_t>(y) * w + x;
-        depth_m[i] = r.cast(o, R * centre, t, false).t;  // unit camera z: t is the depth
+        depth_m[i] = r.cast(o, R * centre, false).t;  // unit camera z: t is the depth
         f.gray[i] = static_cast<uint8_t>(std::clamp(std::lround(gain * grey * 255.0), 0L, 255L));
       }
     }
