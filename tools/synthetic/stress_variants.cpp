@@ -695,19 +695,25 @@ bool two_camera_sequence(const std::string& out, int frames, const DepthCameraSh
   return true;
 }
 
-bool pan_sequence(const std::string& out, double peak_deg_s, int frames, double fps) {
+bool pan_sequence(const std::string& out, double peak_deg_s, int frames, double fps,
+                  double depth_late_ms) {
   if (!(peak_deg_s > 0.0) || frames < 2 || !(fps > 0.0)) {
     return fail("pan: the rate, the frame count and the frame rate must be positive");
   }
+  // Within the pairing's 20 ms, as a Kinect's two streams are after it.
+  if (!(std::fabs(depth_late_ms) <= 15.0)) return fail("pan: --depth-late-ms within +-15 ms");
   SyntheticScene scene;
   scene.pan_peak_deg_s = peak_deg_s;
   scene.max_depth_m = 4.0;  // a structured-light sensor's range; the back wall stays in it
-  if (!create_folder(out) || !write_synthetic_sequence(out, scene, frames, fps) ||
+  if (!create_folder(out) ||
+      !write_synthetic_sequence(out, scene, frames, fps, 1e-3 * depth_late_ms) ||
       !write_text(out + "/camera.conf", synthetic_config(scene))) {
     return fail("cannot write the synthetic sequence into " + out);
   }
-  std::printf("%s: %d frames at %.0f Hz, pan peaking at %.0f deg/s (config: camera.conf)\n",
-              out.c_str(), frames, fps, peak_deg_s);
+  std::printf(
+      "%s: %d frames at %.0f Hz, pan peaking at %.0f deg/s, depth %.1f ms after colour "
+      "(config: camera.conf)\n",
+      out.c_str(), frames, fps, peak_deg_s, depth_late_ms);
   return true;
 }
 

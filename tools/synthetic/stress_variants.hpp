@@ -44,8 +44,10 @@ bool noise_sequence(const std::string& in, const std::string& out, const std::st
 // colour frame pairs with the depth it paired with going forwards.
 bool there_and_back(const std::string& in, const std::string& out, const std::string& config);
 // A synthetic room seen by a camera panning at up to peak_deg_s, with exact ground truth and
-// its config as out/camera.conf.
-bool pan_sequence(const std::string& out, double peak_deg_s, int frames, double fps);
+// its config as out/camera.conf; each depth image taken depth_late_ms after its colour image (as
+// a Kinect streams the two unsynchronised) and stamped so.
+bool pan_sequence(const std::string& out, double peak_deg_s, int frames, double fps,
+                  double depth_late_ms = 0.0);
 // A static camera, mounted looking forward (as the boards' link.T_b_c), before a textured wall
 // whose normal lies distance_m from it at yaw_deg clockwise from forward, at 30 Hz
 // (OBSTACLE_DISTANCE's geometry check: tools/mavlink-check).

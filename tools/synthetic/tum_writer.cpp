@@ -69,7 +69,8 @@ bool write_text(const std::string& path, const std::string& text) {
 }
 
 bool write_sequence(const std::string& dir, const SensorImageSize& size, int frames, double fps,
-                    const std::function<const SyntheticFrame&(int, SE3*)>& frame) {
+                    const std::function<const SyntheticFrame&(int, SE3*)>& frame,
+                    double depth_late_s) {
   ::mkdir((dir + "/rgb").c_str(), 0755);
   ::mkdir((dir + "/depth").c_str(), 0755);
   std::FILE* rgb = std::fopen((dir + "/rgb.txt").c_str(), "w");
@@ -87,7 +88,7 @@ bool write_sequence(const std::string& dir, const SensorImageSize& size, int fra
     const SyntheticFrame& f = frame(i, &T_w_c);
     char rs[32], ds[32];
     stamp(t0 + t, rs, sizeof(rs));
-    stamp(t0 + t + 1e-9 * kDepthStampOffsetNs, ds, sizeof(ds));
+    stamp(t0 + t + depth_late_s + 1e-9 * kDepthStampOffsetNs, ds, sizeof(ds));
     ok = write_png_gray8(dir + "/rgb/" + rs + ".png", size.width_px, size.height_px,
                          f.gray.data()) &&
          write_png_gray16(dir + "/depth/" + ds + ".png", size.depth_width_px, size.depth_height_px,
@@ -103,13 +104,25 @@ bool write_sequence(const std::string& dir, const SensorImageSize& size, int fra
 }
 
 bool write_synthetic_sequence(const std::string& dir, const SyntheticScene& scene, int frames,
-                              double fps) {
-  const std::vector<SyntheticFrame>& rendered = scene.render_path(frames, fps);
-  return write_sequence(dir, same_size(scene.camera.width_px, scene.camera.height_px), frames, fps,
-                        [&](int i, SE3* T_w_c) -> const SyntheticFrame& {
-                          *T_w_c = scene.camera_at(i / fps);
-                          return rendered[static_cast<size_t>(i)];
-                        });
+                              double fps, double depth_late_s) {
+  const SensorImageSize size = same_size(scene.camera.width_px, scene.camera.height_px);
+  if (depth_late_s == 0.0) {
+    const std::vector<SyntheticFrame>& rendered = scene.render_path(frames, fps);
+    return write_sequence(dir, size, frames, fps, [&](int i, SE3* T_w_c) -> const SyntheticFrame& {
+      *T_w_c = scene.camera_at(i / fps);
+      return rendered[static_cast<size_t>(i)];
+    });
+  }
+  SyntheticFrame f;
+  return write_sequence(
+      dir, size, frames, fps,
+      [&](int i, SE3* T_w_c) -> const SyntheticFrame& {
+        *T_w_c = scene.camera_at(i / fps);
+        f = scene.render(*T_w_c);
+        f.depth = scene.render(scene.camera_at(i / fps + depth_late_s)).depth;
+        return f;
+      },
+      depth_late_s);
 }
 
 Params synthetic_params(const SyntheticScene& scene) {

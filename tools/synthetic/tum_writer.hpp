@@ -24,12 +24,15 @@ std::vector<uint8_t> encode_jpeg(const uint8_t* gray, int w, int h, int quality)
 constexpr int64_t kDepthStampOffsetNs = 5'000'000;
 
 // A TUM folder (rgb/, depth/, rgb.txt, depth.txt, groundtruth.txt, camera-to-world) of
-// `frames` frames at `fps`: frame(i, &T_w_c) gives each, its depth at size's depth size.
+// `frames` frames at `fps`: frame(i, &T_w_c) gives each, its depth at size's depth size, taken
+// depth_late_s after its colour image and stamped so.
 bool write_sequence(const std::string& dir, const SensorImageSize& size, int frames, double fps,
-                    const std::function<const SyntheticFrame&(int, SE3*)>& frame);
-// Renders `frames` frames of the scene's path at `fps` into a TUM folder (write_sequence).
+                    const std::function<const SyntheticFrame&(int, SE3*)>& frame,
+                    double depth_late_s = 0.0);
+// Renders `frames` frames of the scene's path at `fps` into a TUM folder (write_sequence), each
+// depth image from where the camera was depth_late_s after its colour image.
 bool write_synthetic_sequence(const std::string& dir, const SyntheticScene& scene, int frames,
-                              double fps);
+                              double fps, double depth_late_s = 0.0);
 // Parameters matching the scene's camera and its exact sensor, whose disparity noise is the
 // matcher's own 0.1 px, not the effective 0.4 px that covers a real Kinect's registration and
 // timing errors.
