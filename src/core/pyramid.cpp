@@ -141,6 +141,77 @@ void compute_depth_gradients(const ImageF& inv_depth, ImageF* gx, ImageF* gy) {
   central_differences(inv_depth, gx, gy, [](float a, float b) { return a > 0.f && b > 0.f; });
 }
 
+namespace {
+// The inverse depth's change per pixel between before and after, central: 0 off a surface (a
+// neighbour missing, or an occluding edge).
+float surface_slope(float before, float here, float after) {
+  const float limit = kMaxRelativeDepthSlope * here;
+  const bool surface = (before > 0.f) & (after > 0.f) & (std::fabs(after - here) <= limit) &
+                       (std::fabs(here - before) <= limit);
+  return surface ? 0.5f * (after - before) : 0.f;
+}
+}  // namespace
+
+void move_inverse_depth(const ImageF& taken, const PinholeIntrinsics& k, const SE3& T_c_d,
+                        ImageF* out) {
+  constexpr float kHalfSquarePx = 0.51f;  // half a square 2 % wider than a pixel
+  out->fill(0.f);
+  const Pinhole pinhole = k.pinhole();
+  const Eigen::Matrix3f R = T_c_d.rotation().cast<float>();
+  const Eigen::Vector3f t = T_c_d.translation().cast<float>();
+  const int width = out->width(), height = out->height();
+  // ceil() without the library call (x86-64's baseline has no rounding instruction).
+  const auto ceil_int = [](float a) {
+    const int i = static_cast<int>(a);
+    return i + (static_cast<float>(i) < a ? 1 : 0);
+  };
+  // Each pixel's point, scaled by its inverse depth, is its ray (z = 1) turned into the target
+  // plus t rho: one division a pixel. The ray turned: the row's part and a step per column.
+  const Eigen::Vector3f column_step = R.col(0) / pinhole.fx;
+  const int last_x = taken.width() - 1, last_y = taken.height() - 1;
+  for (int y = 0; y <= last_y; ++y) {
+    const float ray_y = (static_cast<float>(y) - pinhole.cy) / pinhole.fy;
+    const Eigen::Vector3f row_start = R * Eigen::Vector3f(-pinhole.cx / pinhole.fx, ray_y, 1.f);
+    const float* row = taken.row(y);
+    // The image's outermost pixels have a neighbour missing, and so no slope.
+    const float* up = y > 0 ? taken.row(y - 1) : nullptr;
+    const float* down = y < last_y ? taken.row(y + 1) : nullptr;
+    for (int x = 0; x <= last_x; ++x) {
+      const float rho = row[x];
+      if (rho <= 0.f) continue;
+      const Eigen::Vector3f q = row_start + static_cast<float>(x) * column_step + rho * t;
+      if (q.z() <= 0.f) continue;
+      const float inverse_qz = 1.f / q.z();
+      const float moved = rho * inverse_qz;
+      const float u = pinhole.fx * q.x() * inverse_qz + pinhole.cx;
+      const float v = pinhole.fy * q.y() * inverse_qz + pinhole.cy;
+      const bool reaches = u > -1.f && u < static_cast<float>(width) + 1.f && v > -1.f &&
+                           v < static_cast<float>(height) + 1.f;
+      if (!reaches) continue;  // NaN included
+      // The target pixels whose centres lie in [u - h, u + h) x [v - h, v + h).
+      const int x0 = std::max(0, ceil_int(u - kHalfSquarePx));
+      const int x1 = std::min(width, ceil_int(u + kHalfSquarePx));
+      const int y0 = std::max(0, ceil_int(v - kHalfSquarePx));
+      const int y1 = std::min(height, ceil_int(v + kHalfSquarePx));
+      // On a surface, each target pixel takes the value at its own centre, up to half a pixel
+      // from where this one landed: along the surface's slope, which moves little with the
+      // camera over milliseconds.
+      const float slope_scale = inverse_qz;  // moved / rho
+      const float gu =
+          slope_scale * surface_slope(x > 0 ? row[x - 1] : 0.f, rho, x < last_x ? row[x + 1] : 0.f);
+      const float gv = slope_scale * surface_slope(up != nullptr ? up[x] : 0.f, rho,
+                                                   down != nullptr ? down[x] : 0.f);
+      for (int ty = y0; ty < y1; ++ty) {
+        float* target = out->row(ty);
+        const float along_v = moved + gv * (static_cast<float>(ty) - v);
+        for (int tx = x0; tx < x1; ++tx) {
+          target[tx] = std::max(target[tx], along_v + gu * (static_cast<float>(tx) - u));
+        }
+      }
+    }
+  }
+}
+
 SurfaceCount count_surface_pixels(const ImageF& inv_depth, int stride) {
   SurfaceCount c;
   for (int y = 1; y < inv_depth.height() - 1; y += stride) {
