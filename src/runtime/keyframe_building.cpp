@@ -10,7 +10,7 @@ namespace rgbdtam {
 size_t KeyframeBuildTask::bytes_needed(const Params& p, int map_points) {
   // The builder's scratch (Canny's and each level's edges and gradients) and the two pyramids,
   // per pixel of the camera; measured by test_allocations (it counts what init allocates).
-  constexpr size_t kImageBytesPerPixel = 48;
+  constexpr size_t kImageBytesPerPixel = 44;
   const size_t pixels = static_cast<size_t>(p.camera.width_px) * p.camera.height_px;
   return pixels * kImageBytesPerPixel + KeyframeBuilder::keyframe_bytes(p.camera, p.tracker) +
          KeyframeAliasFinder::bytes_needed(p.camera, p.tracker) +
@@ -26,7 +26,6 @@ void KeyframeBuildTask::allocate(const Params& p, int map_points, ClockFn clock)
   alias_range_m_ = alias_range_m(p);
   frame_.allocate(p.camera, p.sensor.depth_factor, p.sensor.depth_range);
   propagated_.allocate(p.camera, p.sensor.depth_factor, p.sensor.depth_range);
-  depth_in_colour_.allocate(p.camera.width_px, p.camera.height_px);
   for (LocalMap& m : local_maps_) m.points.reserve_once(map_points);
   window_.allocate(p, builder_);
 }
@@ -49,32 +48,11 @@ void KeyframeBuildTask::step(const KeyframeOrder& order) {
   frame_.build_gray();
   frame_.build_inverse_depth_levels();
   frame_.set_T_c_d(order.T_c_d);
-  // The geometric points, and the window's trackings of this frame, take the depth from where it
-  // was taken (FramePyramid::T_c_d), as measured. What sits on the colour image's pixels takes it
-  // moved to where the colour image was taken: the photometric points here and, once built, the
-  // mapper's sensor prior and the loop module's view of the keyframe (frame()).
-  const bool taken_elsewhere = !is_identity(order.T_c_d);
-  if (taken_elsewhere) {
-    move_inverse_depth(frame_.inverse_depth(0), frame_.intrinsics(0), order.T_c_d,
-                       &depth_in_colour_);
-  }
-  const ImageF& sensor_in_colour = taken_elsewhere ? depth_in_colour_ : frame_.inverse_depth(0);
-  if (order.with_local_maps) {
-    fill_sensor_blind_pixels(sensor_in_colour, order.T_w_k);
-  } else if (taken_elsewhere) {
-    propagated_.inverse_depth_level0().copy_from(sensor_in_colour);
-    propagated_.build_inverse_depth_levels();
-  }
-  const bool own_depth_pyramid = order.with_local_maps || taken_elsewhere;
+  if (order.with_local_maps) fill_sensor_blind_pixels(order.T_w_k);
   builder_.build(frame_, order.id, order.timestamp_ns, order.T_w_k, &keyframe_,
-                 own_depth_pyramid ? &propagated_ : nullptr);
+                 order.with_local_maps ? &propagated_ : nullptr);
   aliases_.find(frame_, keyframe_, alias_range_m_, &keyframe_.aliases);
   window_.measure(frame_);
-  if (taken_elsewhere) {
-    frame_.inverse_depth_level0().copy_from(depth_in_colour_);
-    frame_.build_inverse_depth_levels();
-    frame_.set_T_c_d(SE3());
-  }
   if (clock_ != nullptr) {
     last_build_ns_ = clock_() - t0;
     per_keyframe_.add(last_build_ns_);
@@ -97,9 +75,10 @@ void KeyframeBuildTask::release() {
   in_flight_ = false;
 }
 
-void KeyframeBuildTask::fill_sensor_blind_pixels(const ImageF& sensor, const SE3& T_w_c) {
+void KeyframeBuildTask::fill_sensor_blind_pixels(const SE3& T_w_c) {
   ImageF& map = propagated_.inverse_depth_level0();
-  map.copy_from(sensor);
+  const ImageF& sensor = frame_.inverse_depth(0);
+  std::memcpy(map.data(), sensor.data(), sizeof(float) * static_cast<size_t>(map.size()));
   const Pinhole pinhole = frame_.intrinsics(0).pinhole();
   for (const LocalMap& local : local_maps_) {
     const SE3 T_c_k = T_w_c.inverse() * local.T_w_k;

@@ -6,6 +6,10 @@
 
 namespace rgbdtam {
 namespace {
+void copy_image(const ImageF& from, ImageF* to) {
+  std::memcpy(to->data(), from.data(), sizeof(float) * static_cast<size_t>(from.size()));
+}
+
 // Median and nearest depth of the valid sensor pixels, from a sparse sample.
 float median_depth_m(const ImageF& inverse_depth, float* nearest_m) {
   constexpr int kStride = 37;  // a prime, so the sample does not alias with image rows
@@ -57,8 +61,8 @@ void MappingModule::start(Job* job, const MapperFrame& frame) {
   job->handle = frame.new_keyframe;
   job->keyframe = keyframes_->get(frame.new_keyframe);  // pinned: it stays until unpinned
   RGBDTAM_ASSERT(job->keyframe != nullptr, "the tracker recycled a pinned keyframe");
-  job->gray.copy_from(frame.gray);
-  job->sensor_inverse_depth.copy_from(frame.inverse_depth);
+  copy_image(frame.gray, &job->gray);
+  copy_image(frame.inverse_depth, &job->sensor_inverse_depth);
   std::memcpy(job->edges.data(), frame.edges.data(), static_cast<size_t>(frame.edges.size()));
   float nearest_m = 0.f;
   job->median_depth_m = median_depth_m(job->sensor_inverse_depth, &nearest_m);
@@ -97,7 +101,7 @@ void MappingModule::remember(const MapperFrame& frame) {
     }
   }
   EarlierFrame& e = earlier_[earlier_next_];
-  e.gray.copy_from(frame.gray);
+  copy_image(frame.gray, &e.gray);
   e.T_w_c = frame.T_w_c;
   earlier_next_ = (earlier_next_ + 1) % kEarlierFrames;
   earlier_count_ = std::min(earlier_count_ + 1, kEarlierFrames);
@@ -179,10 +183,10 @@ void MappingModule::finalize(Job* job) {
   auto tracked = [this](const FusedPixel& p) {
     return p.source != DepthSource::kMultiView || mv_.usable_for_tracking(p.rho, p.sigma);
   };
-  fused_.gray(0).copy_from(job->gray);
+  copy_image(job->gray, &fused_.gray(0));
   fused_.build_gray();
   ImageF& map = fused_.inverse_depth_level0();
-  map.copy_from(job->sensor_inverse_depth);
+  copy_image(job->sensor_inverse_depth, &map);
   for (const FusedPixel& p : pixels_) {
     if (tracked(p)) map.at(p.x, p.y) = p.rho;
     switch (p.source) {

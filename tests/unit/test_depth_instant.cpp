@@ -101,67 +101,6 @@ TEST_F(DepthInstant, TheKeyframesLateDepthIsTrackedFromWhereItWasTaken) {
   expect_tracked_where_taken("the keyframe's", track_error(frame, T_k_c), at_its_instant);
 }
 
-TEST_F(DepthInstant, DepthMovedToTheColoursInstantIsTheDepthSeenFromThere) {
-  FramePyramid taken, seen;
-  render(SE3(), kT_c_d, &taken);
-  testing::synthetic_pyramid(room_.render(SE3()), p_, &seen);
-  ImageF moved;
-  moved.allocate(taken.inverse_depth(0).width(), taken.inverse_depth(0).height());
-  move_inverse_depth(taken.inverse_depth(0), taken.intrinsics(0), kT_c_d, &moved);
-  // Pixel by pixel against the depth rendered from the colour camera: the same surfaces, but for
-  // outlines and the holes where the depth camera did not see.
-  const ImageF& truth = seen.inverse_depth(0);
-  int both = 0, close = 0, fine = 0, holes = 0, as_taken_close = 0;
-  for (int i = 0; i < truth.size(); ++i) {
-    const float t = truth.data()[i];
-    if (t <= 0.f) continue;
-    const float m = moved.data()[i];
-    if (m <= 0.f) {
-      ++holes;
-      continue;
-    }
-    ++both;
-    close += std::abs(m - t) < 0.01f * t ? 1 : 0;
-    fine += std::abs(m - t) < 0.001f * t ? 1 : 0;
-    const float as_taken = taken.inverse_depth(0).data()[i];
-    as_taken_close += std::abs(as_taken - t) < 0.01f * t ? 1 : 0;
-  }
-  std::printf(
-      "%d pixels: %.1f %% within 1 %% of the truth moved (%.1f %% within 0.1 %%), %.1f %% as "
-      "taken, %d holes\n",
-      both, 100.0 * close / both, 100.0 * fine / both, 100.0 * as_taken_close / both, holes);
-  EXPECT_GT(close, 0.97 * both);
-  // Each pixel's value taken at its own centre along the surface, not up to half a pixel off
-  // (65 % within 0.1 % so).
-  EXPECT_GT(fine, 0.95 * both);
-  EXPECT_LT(as_taken_close, 0.9 * both) << "the test shows nothing";
-  EXPECT_LT(holes, truth.size() * 3 / 100);
-}
-
-TEST_F(DepthInstant, TheKeyframesPhotometricPointsTakeTheDepthMovedToTheColoursInstant) {
-  FramePyramid own;
-  render(SE3(), kT_c_d, &own);
-  own.set_T_c_d(kT_c_d);
-  const SE3 T_k_c(so3_exp(Vector3d(0.0, 1.0, 0.0) * kDeg), Vector3d(0.03, 0.0, 0.01));
-  FramePyramid frame;
-  testing::synthetic_pyramid(room_.render(T_k_c), p_, &frame);
-  builder_.build(own, 0, 0, SE3(), &kf_);
-  const PoseError where_taken = track_error(frame, T_k_c);
-  FramePyramid moved;
-  moved.allocate(p_.camera, p_.sensor.depth_factor, p_.sensor.depth_range);
-  move_inverse_depth(own.inverse_depth(0), own.intrinsics(0), kT_c_d,
-                     &moved.inverse_depth_level0());
-  moved.build_inverse_depth_levels();
-  builder_.build(own, 0, 0, SE3(), &kf_, &moved);
-  const PoseError at_colours_instant = track_error(frame, T_k_c);
-  std::printf(
-      "pose error %.2f mm %.3f deg with the photometric points' depth where it was taken, "
-      "%.2f mm %.3f deg moved to the colour's instant\n",
-      1e3 * where_taken.m, where_taken.rad / kDeg, 1e3 * at_colours_instant.m,
-      at_colours_instant.rad / kDeg);
-  EXPECT_LT(at_colours_instant.m, 0.6 * where_taken.m);
-}
-
 TEST_F(DepthInstant, ADepthPoseIsForgottenWithTheDepth) {
   FramePyramid frame;
   render(SE3(), kT_c_d, &frame);

@@ -3,7 +3,6 @@
 // Pixel (x, y) has its centre at integer coordinates; x right, y down.
 
 #include <cstdint>
-#include <cstring>
 #include <memory>
 
 #include "rgbdtam/core/assert.hpp"
@@ -30,11 +29,6 @@ class Image {
   const T* row(int y) const { return data_.get() + static_cast<size_t>(y) * width_; }
   T& at(int x, int y) { return row(y)[x]; }
   const T& at(int x, int y) const { return row(y)[x]; }
-  // Images never resize: only one of the same size is copied.
-  void copy_from(const Image& from) {
-    RGBDTAM_ASSERT(from.width_ == width_ && from.height_ == height_, "images of one size");
-    std::memcpy(data_.get(), from.data_.get(), sizeof(T) * static_cast<size_t>(size()));
-  }
   void fill(T value) {
     for (int i = 0; i < size(); ++i) data_[i] = value;
   }

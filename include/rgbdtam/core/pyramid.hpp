@@ -62,15 +62,6 @@ struct SurfaceCount {
 };
 SurfaceCount count_surface_pixels(const ImageF& inv_depth, int stride);
 
-// Inverse depth taken from the camera at T_c_d (FramePyramid::T_c_d), seen from the camera c,
-// for the few milliseconds between a Kinect's two images: each pixel a square of surface around
-// where its centre lands, the nearest surface winning, each target pixel taking the value at its
-// own centre along the surface's slope; pixels nothing reaches are holes (0). The squares are 2 %
-// wider than a pixel: milliseconds of motion stretch a surface by less, and wider squares would
-// spread the nearer surface over its outlines (DepthRegistration's 15 % are for a baseline).
-void move_inverse_depth(const ImageF& taken, const PinholeIntrinsics& k, const SE3& T_c_d,
-                        ImageF* out);
-
 // Central-difference gradients in intensity (or inverse-depth) units per pixel. Border
 // pixels, and inverse-depth pixels next to an invalid one, get 0.
 void compute_gradients(const ImageF& img, ImageF* gx, ImageF* gy);

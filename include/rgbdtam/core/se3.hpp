@@ -55,11 +55,6 @@ class SE3 {
 // The adjoint of T for twists ordered (v, omega): T exp(xi) T^-1 = exp(Ad(T) xi).
 Matrix6d adjoint(const SE3& T);
 
-// Exactly the identity, as SE3() is: no motion at all, not a small one.
-inline bool is_identity(const SE3& T) {
-  return T.translation().isZero(0.0) && T.quaternion().vec().isZero(0.0);
-}
-
 // Whether the motion d moves by at most max_m and turns by at most max_rad.
 inline bool within(const SE3& d, double max_m, double max_rad) {
   return d.translation().norm() <= max_m && so3_log(d.quaternion()).norm() <= max_rad;

@@ -54,8 +54,7 @@ class KeyframeBuildTask {
   // the builder's thread is idle).
   void submit(const KeyframeOrder& order, bool at_once = false);
   // Tracker, between frames: true once the ordered keyframe is built; then hand_over() moves its
-  // points into the pool's slot, and frame() and edges() are the keyframe's until release():
-  // its depth seen from where its colour image was taken (T_c_d identity).
+  // points into the pool's slot, and frame() and edges() are the keyframe's until release().
   bool built() const { return in_flight_ && built_.load(std::memory_order_acquire); }
   void hand_over(Keyframe* kf);
   const FramePyramid& frame() const { return frame_; }
@@ -71,8 +70,7 @@ class KeyframeBuildTask {
   int64_t last_build_ns() const { return last_build_ns_; }
 
  private:
-  // sensor: the keyframe's inverse depth, seen from where its colour image was taken.
-  void fill_sensor_blind_pixels(const ImageF& sensor, const SE3& T_w_c);
+  void fill_sensor_blind_pixels(const SE3& T_w_c);
 
   KeyframeOrderQueue* queue_ = nullptr;
   ClockFn clock_ = nullptr;
@@ -80,8 +78,7 @@ class KeyframeBuildTask {
   KeyframeAliasFinder aliases_;
   double alias_range_m_ = 0.0;
   FramePyramid frame_;       // the keyframe's grey images and sensor inverse depth
-  ImageF depth_in_colour_;   // ... that inverse depth, taken elsewhere, moved to the colour's
-  FramePyramid propagated_;  // ... with the local maps where the sensor is blind
+  FramePyramid propagated_;  // ... its inverse depth with the local maps where the sensor is blind
   LocalMap local_maps_[kLocalMaps];
   Keyframe keyframe_;  // its points, until handed over
   WindowMeasurement window_;
