@@ -2,6 +2,7 @@
 // with noise for its images, and wandered over. Whatever cannot be tracked is reported lost.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -13,7 +14,9 @@
 #include "rgbdtam/hal/tum_replay_source.hpp"
 #include "rgbdtam/runtime/params.hpp"
 #include "stress_variants.hpp"
+#include "synthetic_scene.hpp"
 #include "test_paths.hpp"
+#include "tum_writer.hpp"
 
 namespace rgbdtam {
 namespace {
@@ -232,6 +235,44 @@ TEST(ClipVariants, TheClipWanderedOverIsNeverFalseValid) {
   EXPECT_LE(out.counters.withheld, 15u) << "no more than one window's frames";
   const double withheld = static_cast<double>(out.counters.withheld) / out.counters.frames;
   testing::expect_tracked_or_lost(out, "the clip wandered over", 0.95 - withheld);
+}
+
+// A pan whose depth is taken later than its colour (a Kinect's unsynchronised streams): each
+// depth image is the room seen from where the camera was then, and is stamped so.
+TEST(ClipVariants, APansLateDepthIsTakenAndStampedLate) {
+  const std::string dir = testing::make_temp_dir("pan_late_depth");
+  constexpr double kLateMs = 8.0, kPeakDegS = 60.0, kFps = 30.0;
+  constexpr int kFrames = 3;
+  ASSERT_TRUE(testing::pan_sequence(dir + "/pan", kPeakDegS, kFrames, kFps, kLateMs));
+  EXPECT_FALSE(testing::pan_sequence(dir + "/beyond", kPeakDegS, kFrames, kFps, 20.0))
+      << "beyond what pairing takes";
+  testing::SyntheticScene scene;  // as pan_sequence sets it
+  scene.pan_peak_deg_s = kPeakDegS;
+  scene.max_depth_m = 4.0;
+  const Params p = testing::synthetic_params(scene);
+  const SensorImageSize size = sensor_image_size(p);
+  TumReplaySource source;
+  ASSERT_TRUE(source
+                  .open((dir + "/pan").c_str(), size, p.sensor.max_rgb_depth_dt_ns,
+                        p.sensor.depth_time_offset_ns)
+                  .is_ok());
+  ImageU8 gray;
+  ImageU16 depth;
+  gray.allocate(size.width_px, size.height_px);
+  depth.allocate(size.depth_width_px, size.depth_height_px);
+  for (int i = 0; i < kFrames; ++i) {
+    SensorFrame f;
+    Status warning;
+    ASSERT_TRUE(source.next_into(&gray, &depth, &f, &warning).is_ok());
+    ASSERT_NE(f.depth, nullptr);
+    const int64_t late_ns = f.depth_timestamp_ns - f.timestamp_ns - p.sensor.depth_time_offset_ns;
+    EXPECT_NEAR(static_cast<double>(late_ns), kLateMs * 1e6, 1e3) << "frame " << i;
+    const double t_s = i / kFps;
+    const testing::SyntheticFrame then = scene.render(scene.camera_at(t_s + 1e-3 * kLateMs));
+    const testing::SyntheticFrame now = scene.render(scene.camera_at(t_s));
+    EXPECT_TRUE(std::equal(then.depth.begin(), then.depth.end(), f.depth)) << "frame " << i;
+    EXPECT_FALSE(std::equal(now.depth.begin(), now.depth.end(), f.depth)) << "frame " << i;
+  }
 }
 
 }  // namespace
