@@ -246,9 +246,7 @@ TEST(ClipVariants, APansLateDepthIsTakenAndStampedLate) {
   ASSERT_TRUE(testing::pan_sequence(dir + "/pan", kPeakDegS, kFrames, kFps, kLateMs));
   EXPECT_FALSE(testing::pan_sequence(dir + "/beyond", kPeakDegS, kFrames, kFps, 20.0))
       << "beyond what pairing takes";
-  testing::SyntheticScene scene;  // as pan_sequence sets it
-  scene.pan_peak_deg_s = kPeakDegS;
-  scene.max_depth_m = 4.0;
+  const testing::SyntheticScene scene = testing::pan_scene(kPeakDegS);
   const Params p = testing::synthetic_params(scene);
   const SensorImageSize size = sensor_image_size(p);
   TumReplaySource source;

@@ -695,6 +695,13 @@ bool two_camera_sequence(const std::string& out, int frames, const DepthCameraSh
   return true;
 }
 
+SyntheticScene pan_scene(double peak_deg_s) {
+  SyntheticScene scene;
+  scene.pan_peak_deg_s = peak_deg_s;
+  scene.max_depth_m = 4.0;  // a structured-light sensor's range; the back wall stays in it
+  return scene;
+}
+
 bool pan_sequence(const std::string& out, double peak_deg_s, int frames, double fps,
                   double depth_late_ms) {
   if (!(peak_deg_s > 0.0) || frames < 2 || !(fps > 0.0)) {
@@ -702,9 +709,7 @@ bool pan_sequence(const std::string& out, double peak_deg_s, int frames, double 
   }
   // Within the pairing's 20 ms, as a Kinect's two streams are after it.
   if (!(std::fabs(depth_late_ms) <= 15.0)) return fail("pan: --depth-late-ms within +-15 ms");
-  SyntheticScene scene;
-  scene.pan_peak_deg_s = peak_deg_s;
-  scene.max_depth_m = 4.0;  // a structured-light sensor's range; the back wall stays in it
+  const SyntheticScene scene = pan_scene(peak_deg_s);
   if (!create_folder(out) ||
       !write_synthetic_sequence(out, scene, frames, fps, 1e-3 * depth_late_ms) ||
       !write_text(out + "/camera.conf", synthetic_config(scene))) {

@@ -4,6 +4,8 @@
 
 #include <string>
 
+#include "synthetic_scene.hpp"
+
 namespace rgbdtam::testing {
 
 // A depth camera beside the colour camera, as a RealSense or Orbbec has one: baseline_m to its
@@ -43,6 +45,9 @@ bool noise_sequence(const std::string& in, const std::string& out, const std::st
 // stamps are mirrored about the colour-depth pairing offset of config, so that each reversed
 // colour frame pairs with the depth it paired with going forwards.
 bool there_and_back(const std::string& in, const std::string& out, const std::string& config);
+// The room pan_sequence renders: the camera panning at up to peak_deg_s, within a
+// structured-light sensor's range.
+SyntheticScene pan_scene(double peak_deg_s);
 // A synthetic room seen by a camera panning at up to peak_deg_s, with exact ground truth and
 // its config as out/camera.conf; each depth image taken depth_late_ms after its colour image (as
 // a Kinect streams the two unsynchronised) and stamped so.
