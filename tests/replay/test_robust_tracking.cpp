@@ -8,6 +8,7 @@
 
 #include "rgbdtam/core/attitude.hpp"
 #include "rgbdtam/runtime/tracking_pipeline.hpp"
+#include "stress_variants.hpp"
 #include "synthetic_scene.hpp"
 #include "test_paths.hpp"
 #include "tum_writer.hpp"
@@ -83,9 +84,8 @@ TEST(RobustTracking, AKidnappedFrameIsReportedLostAndTrackingResumes) {
 
 // A hand-held pan at half resolution, peaking at peak_deg_s.
 testing::SyntheticScene hand_held_pan(double peak_deg_s) {
-  testing::SyntheticScene scene = testing::SyntheticScene::half_resolution();
-  scene.pan_peak_deg_s = peak_deg_s;
-  scene.max_depth_m = 4.0;
+  testing::SyntheticScene scene = testing::pan_scene(peak_deg_s);
+  scene.camera = testing::SyntheticScene::half_resolution().camera;
   return scene;
 }
 
