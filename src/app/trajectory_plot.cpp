@@ -1,11 +1,11 @@
 #include "trajectory_plot.hpp"
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
 
+#include "rgbdtam/core/symmetric_eigen.hpp"
 #include "rgbdtam/hal/file.hpp"
 
 namespace rgbdtam {
@@ -175,8 +175,8 @@ std::string trajectory_svg(const PlotInput& in) {
     const Vector3d d = p.T_w_c.translation() - mean;
     covariance += d * d.transpose();
   }
-  const Eigen::SelfAdjointEigenSolver<Matrix3d> eigen(covariance);
-  const Vector3d first = eigen.eigenvectors().col(2), second = eigen.eigenvectors().col(1);
+  const SymmetricEigen<3> eigen = symmetric_eigen(covariance);
+  const Vector3d first = eigen.vectors.col(2), second = eigen.vectors.col(1);
   auto project = [&](const Vector3d& p) {
     return Eigen::Vector2d((p - mean).dot(first), (p - mean).dot(second));
   };

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include <Eigen/Eigenvalues>
+#include "rgbdtam/core/symmetric_eigen.hpp"
 
 namespace rgbdtam {
 namespace {
@@ -48,7 +48,7 @@ Matrix3d depth_translation_axes(const TrackPoints& geometric) {
     H += j * j.transpose();
   }
   if (!(H.trace() > 0.0)) return Matrix3d::Identity();
-  return Eigen::SelfAdjointEigenSolver<Matrix3d>(H).eigenvectors();
+  return symmetric_eigen(H).vectors;
 }
 
 void KeyframeAliasFinder::allocate(const Keyframe& capacity_model, const TrackerOptions& opt) {

@@ -1,9 +1,9 @@
 #include "rgbdtam/core/rigid_alignment.hpp"
 
-#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 
+#include "rgbdtam/core/symmetric_eigen.hpp"
 #include "rgbdtam/core/xorshift.hpp"
 
 namespace rgbdtam {
@@ -51,12 +51,12 @@ bool horn_alignment(const PointPair* pairs, int n, const uint8_t* use, SE3* T_b_
       yz - zy, xx - yy - zz, xy + yx, zx + xz,   //
       zx - xz, xy + yx, -xx + yy - zz, yz + zy,  //
       xy - yx, zx + xz, yz + zy, -xx - yy + zz;
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> eig(N);
+  const SymmetricEigen<4> eig = symmetric_eigen(N);
   // Collinear or coincident points leave the rotation undetermined: the two largest
   // eigenvalues of N coincide.
-  const Eigen::Vector4d lambda = eig.eigenvalues();
+  const Eigen::Vector4d& lambda = eig.values;
   if (!(lambda(3) - lambda(2) > 1e-9 * std::max(1.0, std::fabs(lambda(3))))) return false;
-  const Eigen::Vector4d q = eig.eigenvectors().col(3);
+  const Eigen::Vector4d q = eig.vectors.col(3);
   const Eigen::Quaterniond R(q(0), q(1), q(2), q(3));
   *T_b_a = SE3(R, cb - R.normalized() * ca);
   return true;

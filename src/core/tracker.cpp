@@ -4,9 +4,9 @@
 #include <limits>
 
 #include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
 
 #include "rgbdtam/core/lanes.hpp"
+#include "rgbdtam/core/symmetric_eigen.hpp"
 #include "rgbdtam/core/tracker.hpp"
 
 namespace rgbdtam {
@@ -651,12 +651,9 @@ void Tracker::describe_fit(const Keyframe& kf, const FramePyramid& frame, const 
   const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(out->information);
   if (ldlt.info() == Eigen::Success && out->information.trace() > 0.0) {
     const Eigen::Matrix<double, 6, 6> cov = ldlt.solve(Eigen::Matrix<double, 6, 6>::Identity());
-    const Eigen::SelfAdjointEigenSolver<Matrix3d> t(cov.topLeftCorner<3, 3>(),
-                                                    Eigen::EigenvaluesOnly);
-    const Eigen::SelfAdjointEigenSolver<Matrix3d> r(cov.bottomRightCorner<3, 3>(),
-                                                    Eigen::EigenvaluesOnly);
-    out->translation_std_m = std::sqrt(std::max(0.0, t.eigenvalues().maxCoeff()));
-    out->rotation_std_rad = std::sqrt(std::max(0.0, r.eigenvalues().maxCoeff()));
+    const Matrix3d cov_t = cov.topLeftCorner<3, 3>(), cov_r = cov.bottomRightCorner<3, 3>();
+    out->translation_std_m = std::sqrt(std::max(0.0, symmetric_eigen(cov_t).values(2)));
+    out->rotation_std_rad = std::sqrt(std::max(0.0, symmetric_eigen(cov_r).values(2)));
   } else {
     out->translation_std_m = out->rotation_std_rad = std::numeric_limits<double>::infinity();
   }
@@ -679,8 +676,8 @@ void Tracker::describe_depth_degeneracy(const TrackPoints& geo,
   if ((out->terms & kGeometricTerm) != 0 && H_geo.topLeftCorner<3, 3>().trace() > 0.0) {
     // Translation alone: sensor noise gives every direction some information from a plane's
     // gradients, which turns the six-dimensional weakest direction, but not these.
-    const Eigen::SelfAdjointEigenSolver<Matrix3d> t(H_geo.topLeftCorner<3, 3>());
-    out->depth_translation_axes = t.eigenvectors();
+    const Matrix3d H_t = H_geo.topLeftCorner<3, 3>();
+    out->depth_translation_axes = symmetric_eigen(H_t).vectors;
   }
   int n = 0;
   for (int i = 0; i < geo.size(); i += kStride) scratch_[n++] = geo.z()[i];
@@ -691,10 +688,10 @@ void Tracker::describe_depth_degeneracy(const TrackPoints& geo,
   // alike.
   Vector6d s;
   s << depth, depth, depth, 1.0, 1.0, 1.0;
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> geometric(
-      s.asDiagonal() * H_geo * s.asDiagonal());
-  const Vector6d& e = geometric.eigenvalues();
-  const Vector6d u = geometric.eigenvectors().col(0);
+  const SymmetricEigen<6> geometric =
+      symmetric_eigen(Matrix6d(s.asDiagonal() * H_geo * s.asDiagonal()));
+  const Vector6d& e = geometric.values;
+  const Vector6d u = geometric.vectors.col(0);
   out->weak_direction = s.asDiagonal() * u / depth;
   if (!(e(0) < kDegenerate * e(5))) return;
   out->depth_degenerate = true;
