@@ -6,8 +6,6 @@
 #include <cstddef>
 #include <cstdint>
 
-#include <Eigen/LU>
-
 #include "rgbdtam/core/attitude.hpp"
 #include "rgbdtam/core/fixed_vector.hpp"
 #include "rgbdtam/core/image.hpp"
@@ -89,11 +87,7 @@ struct PoseEstimate {
 
 // The covariance sent with a pose: the inverse of its information (NaN where it has none), over
 // (translation, rotation) in the camera frame.
-inline Eigen::Matrix<double, 6, 6> pose_covariance(const PoseEstimate& pose) {
-  const Eigen::FullPivLU<Eigen::Matrix<double, 6, 6>> lu(pose.information);
-  if (!lu.isInvertible()) return Eigen::Matrix<double, 6, 6>::Constant(NAN);
-  return lu.inverse();
-}
+Eigen::Matrix<double, 6, 6> pose_covariance(const PoseEstimate& pose);
 
 // How a keyframe's pose was measured against the keyframe it names as its reference.
 enum class EdgeKind : uint8_t {
