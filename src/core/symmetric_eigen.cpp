@@ -1,5 +1,6 @@
 #include "rgbdtam/core/symmetric_eigen.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -15,20 +16,31 @@ constexpr int kMaxSweeps = 50;
 void jacobi(double* a, int n, double* values, double* vectors) {
   auto A = [&](int r, int c) -> double& { return a[c * n + r]; };
   auto V = [&](int r, int c) -> double& { return vectors[c * n + r]; };
-  double scale = 0.0;
+  // Scaled to entries of at most 1, as Eigen's solver does: sums of squares neither overflow
+  // nor underflow.
+  double max_abs = 0.0;
+  bool finite = true;
   for (int c = 0; c < n; ++c) {
-    for (int r = 0; r < n; ++r) {
-      if (r < c) A(r, c) = A(c, r);
-      V(r, c) = r == c ? 1.0 : 0.0;
-      scale += A(r, c) * A(r, c);
+    for (int r = c; r < n; ++r) {
+      finite = finite && std::isfinite(A(r, c));
+      max_abs = std::max(max_abs, std::fabs(A(r, c)));
     }
   }
-  if (!std::isfinite(scale)) {
+  if (!finite) {
     for (int i = 0; i < n; ++i) values[i] = std::numeric_limits<double>::quiet_NaN();
     return;
   }
+  const double unit = max_abs > 0.0 ? 1.0 / max_abs : 1.0;
+  double sum_sq = 0.0;
+  for (int c = 0; c < n; ++c) {
+    for (int r = 0; r < n; ++r) {
+      A(r, c) = r < c ? A(c, r) : A(r, c) * unit;  // the lower triangle's, scaled already
+      V(r, c) = r == c ? 1.0 : 0.0;
+      sum_sq += A(r, c) * A(r, c);
+    }
+  }
   const double tiny =
-      scale * std::numeric_limits<double>::epsilon() * std::numeric_limits<double>::epsilon();
+      sum_sq * std::numeric_limits<double>::epsilon() * std::numeric_limits<double>::epsilon();
   for (int sweep = 0; sweep < kMaxSweeps; ++sweep) {
     double off = 0.0;
     for (int q = 1; q < n; ++q)
@@ -60,7 +72,7 @@ void jacobi(double* a, int n, double* values, double* vectors) {
       }
     }
   }
-  for (int i = 0; i < n; ++i) values[i] = A(i, i);
+  for (int i = 0; i < n; ++i) values[i] = A(i, i) * max_abs;
   // Insertion sort, ascending, the vectors with their values.
   for (int i = 1; i < n; ++i) {
     for (int j = i; j > 0 && values[j] < values[j - 1]; --j) {

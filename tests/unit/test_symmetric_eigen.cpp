@@ -69,6 +69,20 @@ TEST(SymmetricEigen, ReadsTheLowerTriangle) {
   EXPECT_NEAR(std::fabs(e.vectors(2, 2)), 1.0, 1e-15);
 }
 
+TEST(SymmetricEigen, EntriesFarFromOneNeitherOverflowNorUnderflow) {
+  // Squared, 1e200 overflows and 1e-200 underflows; the solver works on a scaled copy.
+  for (const double scale : {1e200, 1e-200}) {
+    const Eigen::Vector4d lambda(-1.0, 0.5, 2.0, 3.0);
+    const Eigen::Matrix4d q = random_rotation<4>(7);
+    const Eigen::Matrix4d a = q * (scale * lambda).asDiagonal() * q.transpose();
+    const SymmetricEigen<4> e = symmetric_eigen(a);
+    for (int i = 0; i < 4; ++i) EXPECT_NEAR(e.values(i) / scale, lambda(i), 1e-13) << scale;
+  }
+  const SymmetricEigen<3> zero = symmetric_eigen(Eigen::Matrix3d::Zero().eval());
+  EXPECT_EQ(zero.values, Eigen::Vector3d::Zero());
+  EXPECT_EQ(zero.vectors, Eigen::Matrix3d::Identity());
+}
+
 TEST(SymmetricEigen, RepeatedEigenvaluesGiveAnOrthonormalBasisOfTheirSpace) {
   // Rank one: u u^T has eigenvalue |u|^2 along u and 0 on the plane normal to it.
   const Eigen::Vector4d u(1.0, -2.0, 0.5, 3.0);
