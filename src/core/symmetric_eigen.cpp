@@ -12,7 +12,7 @@ constexpr int kMaxSize = 6;
 constexpr int kMaxSweeps = 50;
 
 // a: n x n column-major, symmetric from its lower triangle; overwritten. values ascending,
-// vectors column-major, column i for values[i]; values all NaN for a non-finite a.
+// vectors column-major, column i for values[i]; all NaN for a non-finite a.
 void jacobi(double* a, int n, double* values, double* vectors) {
   auto A = [&](int r, int c) -> double& { return a[c * n + r]; };
   auto V = [&](int r, int c) -> double& { return vectors[c * n + r]; };
@@ -27,7 +27,8 @@ void jacobi(double* a, int n, double* values, double* vectors) {
     }
   }
   if (!finite) {
-    for (int i = 0; i < n; ++i) values[i] = std::numeric_limits<double>::quiet_NaN();
+    std::fill(values, values + n, std::numeric_limits<double>::quiet_NaN());
+    std::fill(vectors, vectors + n * n, std::numeric_limits<double>::quiet_NaN());
     return;
   }
   const double unit = max_abs > 0.0 ? 1.0 / max_abs : 1.0;

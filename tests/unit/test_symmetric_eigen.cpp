@@ -24,7 +24,7 @@ Eigen::Matrix<double, N, N> random_rotation(uint32_t seed) {
   return q;
 }
 
-// Eigenvalues known to the last bit's order, spread over `decades` decades, in a random basis.
+// Known, distinct eigenvalues spread over `decades` decades, in a random basis.
 template <int N>
 void expect_recovers(uint32_t seed, double decades) {
   SCOPED_TRACE(::testing::Message() << N << "x" << N << ", seed " << seed);
@@ -98,10 +98,11 @@ TEST(SymmetricEigen, RepeatedEigenvaluesGiveAnOrthonormalBasisOfTheirSpace) {
   EXPECT_EQ(identity.vectors, (Eigen::Matrix<double, 6, 6>::Identity()));
 }
 
-TEST(SymmetricEigen, NonFiniteInputGivesNaNValues) {
+TEST(SymmetricEigen, NonFiniteInputGivesNaN) {
   Matrix6d a = Matrix6d::Identity();
   a(4, 1) = std::numeric_limits<double>::quiet_NaN();
   EXPECT_TRUE(symmetric_eigen(a).values.array().isNaN().all());
+  EXPECT_TRUE(symmetric_eigen(a).vectors.array().isNaN().all());
   a(4, 1) = std::numeric_limits<double>::infinity();
   EXPECT_TRUE(symmetric_eigen(a).values.array().isNaN().all());
 }
