@@ -73,15 +73,15 @@ for t in "${targets[@]}"; do
     png_decoder) build "$t" src/hal/png_decoder.cpp tests/fuzz/fuzz_png_decoder.cpp ;;
     text_formats)
       build "$t" src/core/assert.cpp src/core/residuals.cpp src/hal/tum_replay_source.cpp src/hal/tum_trajectory.cpp \
-        src/hal/tum_timestamp.cpp src/hal/file.cpp src/hal/clock.cpp src/hal/png_decoder.cpp \
+        src/hal/tum_timestamp.cpp src/hal/file.cpp src/hal/clock.cpp src/hal/png_decoder.cpp src/port/messages.cpp \
         src/runtime/board.cpp src/runtime/params.cpp src/runtime/key_value.cpp \
         tests/fuzz/fuzz_text_formats.cpp ;;
     map_file)
       build "$t" src/core/{assert,camera,canny,features,keyframe_builder,place_database}.cpp \
-        src/core/{pose_graph,pyramid,residuals,rigid_alignment,se3,tracker,tracking_health}.cpp \
+        src/core/{pose_graph,pyramid,residuals,rigid_alignment,se3,symmetric_eigen,tracker,tracking_health}.cpp \
         src/core/{view_alignment,vocabulary}.cpp src/runtime/map_file.cpp src/runtime/place_recognition.cpp \
         src/runtime/loop_closing.cpp src/runtime/map_checkpoint.cpp src/runtime/params.cpp \
-        src/runtime/key_value.cpp src/port/latency_stats.cpp tests/fuzz/fuzz_map_file.cpp ;;
+        src/runtime/key_value.cpp src/port/{latency_stats,messages}.cpp tests/fuzz/fuzz_map_file.cpp ;;
     *) echo "unknown fuzz target $t" >&2; exit 2 ;;
   esac
   corpus="$out/corpus_$t"
