@@ -77,7 +77,7 @@ for t in "${targets[@]}"; do
         src/runtime/board.cpp src/runtime/params.cpp src/runtime/key_value.cpp \
         tests/fuzz/fuzz_text_formats.cpp ;;
     map_file)
-      build "$t" src/core/{assert,camera,canny,features,keyframe_builder,place_database}.cpp \
+      build "$t" src/core/{assert,camera,canny,features,keyframe_builder,kth_smallest,place_database}.cpp \
         src/core/{pose_graph,pyramid,residuals,rigid_alignment,se3,symmetric_eigen,tracker,tracking_health}.cpp \
         src/core/{view_alignment,vocabulary}.cpp src/runtime/map_file.cpp src/runtime/place_recognition.cpp \
         src/runtime/loop_closing.cpp src/runtime/map_checkpoint.cpp src/runtime/params.cpp \

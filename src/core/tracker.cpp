@@ -5,6 +5,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "rgbdtam/core/kth_smallest.hpp"
 #include "rgbdtam/core/lanes.hpp"
 #include "rgbdtam/core/symmetric_eigen.hpp"
 #include "rgbdtam/core/tracker.hpp"
@@ -302,11 +303,9 @@ void Tracker::estimate_gain_brightness(const TrackPoints& pts) {
 float Tracker::mad_sigma(int m) {
   // sigma = 1.4826 * median(|r - median(r)|) over scratch_[0, m), the paper's MAD estimate.
   float* first = scratch_.get();
-  std::nth_element(first, first + m / 2, first + m);
-  const float median = first[m / 2];
+  const float median = kth_smallest(first, m, m / 2);
   for (int i = 0; i < m; ++i) first[i] = std::fabs(first[i] - median);
-  std::nth_element(first, first + m / 2, first + m);
-  return kMadToSigma * first[m / 2];
+  return kMadToSigma * kth_smallest(first, m, m / 2);
 }
 
 void Tracker::update_scales(int level, int n_ph, int n_geo) {
