@@ -22,17 +22,23 @@ if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 src=$root/src
 mkdir -p "$src"
 
+# deb-src entries derived from the machine's own sources (no host name written here), for this
+# run only: removed however it ends, and written and read again by each run that needs them (a
+# list left by an interrupted run is no sign that apt read it).
+deb_src_list=/etc/apt/sources.list.d/rgbdtam-deb-src.sources
+deb_src_read=false
+trap '$SUDO rm -f $deb_src_list' EXIT
+
 # Fetches one source package's .dsc and upstream tarball and checks the tarball against the
 # .dsc's SHA-256 (libfreenect's Debian tarball is not on the mirror: only upstream is needed).
 fetch_source() {
   local package=$1 tarball_glob=$2
   if compgen -G "$src/$tarball_glob" >/dev/null; then return; fi
-  local list=/etc/apt/sources.list.d/rgbdtam-deb-src.sources
-  if [ ! -f $list ]; then
-    # deb-src entries derived from the machine's own sources (no host name written here).
+  if ! $deb_src_read; then
     sed -n 's/^Types: deb$/Types: deb-src/p; /^Types:/!p' /etc/apt/sources.list.d/debian.sources |
-      $SUDO tee $list >/dev/null
+      $SUDO tee $deb_src_list >/dev/null
     $SUDO apt-get update -qq
+    deb_src_read=true
   fi
   (cd "$src" && apt-get source --download-only -qq "$package" >/dev/null 2>&1 || true)
   local tarball
@@ -48,7 +54,6 @@ fetch_source() {
 
 fetch_source libusb-1.0 'libusb-1.0_*.orig.tar.bz2'
 fetch_source libfreenect 'libfreenect_*.orig.tar.gz'
-$SUDO rm -f /etc/apt/sources.list.d/rgbdtam-deb-src.sources
 
 # In a subshell of its own: its variables, and its temporary folder removed when it ends.
 build_for() (
