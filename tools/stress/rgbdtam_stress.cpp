@@ -28,7 +28,7 @@ int usage() {
                "  rgbdtam-stress two-camera <out> [--frames <n>] [--focal-scale <f>]\n"
                "                [--baseline-m <m>] [--depth-size <w>x<h>]\n"
                "  rgbdtam-stress pan <out> --peak-deg-s <deg/s> [--frames <n>] [--fps <hz>]\n"
-               "                [--depth-late-ms <ms>]\n"
+               "                [--depth-late-ms <ms>] [--readout-ms <ms>]\n"
                "  rgbdtam-stress degenerate <out> --scene corridor|room [--frames <n>]\n"
                "  rgbdtam-stress wall <out> --distance-m <m> --yaw-deg <deg> [--frames <n>]\n"
                "  rgbdtam-stress concat <first> <second> <out> [--gap-s <s>]\n"
@@ -52,6 +52,7 @@ int main(int argc, char** argv) {
   unsigned seed = 1;
   double exposure_ms = 0, peak = 0, fps = 30, gap_s = 1.0, distance_m = 0, yaw_deg = 0;
   double depth_late_ms = 0;
+  double readout_ms = 0;
   DepthCameraShape depth_camera;
   int every = 0, burst = 0, period = 0, frames = -1, block_px = 1;
   std::vector<std::string> positional;
@@ -94,6 +95,8 @@ int main(int argc, char** argv) {
       frames = std::atoi(argv[++i]);
     } else if (a == "--depth-late-ms" && has) {
       depth_late_ms = std::atof(argv[++i]);
+    } else if (a == "--readout-ms" && has) {
+      readout_ms = std::atof(argv[++i]);
     } else if (a == "--fps" && has) {
       fps = std::atof(argv[++i]);
     } else if (a.rfind("--", 0) == 0) {
@@ -144,7 +147,7 @@ int main(int argc, char** argv) {
   } else if (verb == "two-camera" && positional.size() == 1) {
     ok = two_camera_sequence(positional[0], frames_or(kTwoCameraFrames), depth_camera);
   } else if (verb == "pan" && positional.size() == 1) {
-    ok = pan_sequence(positional[0], peak, frames_or(150), fps, depth_late_ms);
+    ok = pan_sequence(positional[0], peak, frames_or(150), fps, depth_late_ms, readout_ms);
   } else {
     return usage();
   }

@@ -703,22 +703,25 @@ SyntheticScene pan_scene(double peak_deg_s) {
 }
 
 bool pan_sequence(const std::string& out, double peak_deg_s, int frames, double fps,
-                  double depth_late_ms) {
+                  double depth_late_ms, double readout_ms) {
   if (!(peak_deg_s > 0.0) || frames < 2 || !(fps > 0.0)) {
     return fail("pan: the rate, the frame count and the frame rate must be positive");
   }
   // Within the pairing's 20 ms, as a Kinect's two streams are after it.
   if (!(std::fabs(depth_late_ms) <= 15.0)) return fail("pan: --depth-late-ms within +-15 ms");
+  if (!(readout_ms >= 0.0 && readout_ms * fps <= 1e3)) {
+    return fail("pan: --readout-ms from 0 to the frame interval");
+  }
   const SyntheticScene scene = pan_scene(peak_deg_s);
   if (!create_folder(out) ||
-      !write_synthetic_sequence(out, scene, frames, fps, 1e-3 * depth_late_ms) ||
+      !write_synthetic_sequence(out, scene, frames, fps, 1e-3 * depth_late_ms, 1e-3 * readout_ms) ||
       !write_text(out + "/camera.conf", synthetic_config(scene))) {
     return fail("cannot write the synthetic sequence into " + out);
   }
   std::printf(
-      "%s: %d frames at %.0f Hz, pan peaking at %.0f deg/s, depth %.1f ms after colour "
-      "(config: camera.conf)\n",
-      out.c_str(), frames, fps, peak_deg_s, depth_late_ms);
+      "%s: %d frames at %.0f Hz, pan peaking at %.0f deg/s, depth %.1f ms after colour, "
+      "colour read out over %.1f ms (config: camera.conf)\n",
+      out.c_str(), frames, fps, peak_deg_s, depth_late_ms, readout_ms);
   return true;
 }
 

@@ -50,9 +50,10 @@ bool there_and_back(const std::string& in, const std::string& out, const std::st
 SyntheticScene pan_scene(double peak_deg_s);
 // A synthetic room seen by a camera panning at up to peak_deg_s, with exact ground truth and
 // its config as out/camera.conf; each depth image taken depth_late_ms after its colour image (as
-// a Kinect streams the two unsynchronised) and stamped so.
+// a Kinect streams the two unsynchronised) and stamped so; the colour image's rows read out
+// over readout_ms (a rolling shutter; 0: all at once).
 bool pan_sequence(const std::string& out, double peak_deg_s, int frames, double fps,
-                  double depth_late_ms = 0.0);
+                  double depth_late_ms = 0.0, double readout_ms = 0.0);
 // A static camera, mounted looking forward (as the boards' link.T_b_c), before a textured wall
 // whose normal lies distance_m from it at yaw_deg clockwise from forward, at 30 Hz
 // (OBSTACLE_DISTANCE's geometry check: tools/mavlink-check).

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <tuple>
 
@@ -160,6 +161,10 @@ SE3 SyntheticScene::camera_at(double t) const {
 }
 
 SyntheticFrame SyntheticScene::render(const SE3& T_w_c) const {
+  return render_rows([&](int) { return T_w_c; });
+}
+
+SyntheticFrame SyntheticScene::render_rows(const std::function<SE3(int)>& T_w_c_of_row) const {
   const std::vector<Plane> planes =
       layout == Layout::kTexturedRoom
           ? scene_planes(with_box, box_in_corner, with_room, back_wall_z_m)
@@ -168,17 +173,21 @@ SyntheticFrame SyntheticScene::render(const SE3& T_w_c) const {
   SyntheticFrame f;
   f.gray.resize(static_cast<size_t>(w) * h);
   f.depth.resize(static_cast<size_t>(w) * h);
-  const Matrix3d R = T_w_c.rotation();
-  const Vector3d o = T_w_c.translation();
+  Matrix3d R;
+  Vector3d o;
   // Per plane, the ray terms that do not depend on the pixel.
   struct Prepared {
     double n_dot_rx, n_dot_ry, n_dot_r1, numerator;
   };
-  std::vector<Prepared> prep;
-  for (const Plane& pl : planes) {
-    const Vector3d nr = R.transpose() * pl.n;  // n . (R ray_c) = (R^T n) . ray_c
-    prep.push_back({nr.x(), nr.y(), nr.z(), pl.d - pl.n.dot(o)});
-  }
+  std::vector<Prepared> prep(planes.size());
+  auto prepare = [&](const SE3& T_w_c) {
+    R = T_w_c.rotation();
+    o = T_w_c.translation();
+    for (size_t k = 0; k < planes.size(); ++k) {
+      const Vector3d nr = R.transpose() * planes[k].n;  // n . (R ray_c) = (R^T n) . ray_c
+      prep[k] = {nr.x(), nr.y(), nr.z(), planes[k].d - planes[k].n.dot(o)};
+    }
+  };
   // Returns the texture value and writes the ray depth (camera z) of the nearest hit. Only that
   // hit is shaded: the texture's sines take most of the rendering (under qemu, most of a test).
   auto cast = [&](double px, double py, double* depth) {
@@ -204,6 +213,7 @@ SyntheticFrame SyntheticScene::render(const SE3& T_w_c) const {
                    : 0.0;
   };
   for (int y = 0; y < h; ++y) {
+    prepare(T_w_c_of_row(y));
     for (int x = 0; x < w; ++x) {
       double depth;
       const double value = cast(x, y, &depth);

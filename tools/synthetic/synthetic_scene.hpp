@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "rgbdtam/core/camera.hpp"
@@ -37,6 +38,8 @@ struct SyntheticScene {
   double back_wall_z_m = 3.0;  // world z of the textured back wall
 
   SyntheticFrame render(const SE3& T_w_c) const;
+  // Each row y from its own pose: a rolling shutter's rows are exposed one after another.
+  SyntheticFrame render_rows(const std::function<SE3(int)>& T_w_c_of_row) const;
   // Frames i = 0 .. frames-1 at pose_at(i / fps), rendered once per test binary.
   const std::vector<SyntheticFrame>& render_path(int frames, double fps) const;
   // The same scene seen by a 320x240 camera, for tests where resolution does not matter.

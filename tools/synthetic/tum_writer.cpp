@@ -104,22 +104,25 @@ bool write_sequence(const std::string& dir, const SensorImageSize& size, int fra
 }
 
 bool write_synthetic_sequence(const std::string& dir, const SyntheticScene& scene, int frames,
-                              double fps, double depth_late_s) {
+                              double fps, double depth_late_s, double readout_s) {
   const SensorImageSize size = same_size(scene.camera.width_px, scene.camera.height_px);
-  if (depth_late_s == 0.0) {
+  if (depth_late_s == 0.0 && readout_s == 0.0) {
     const std::vector<SyntheticFrame>& rendered = scene.render_path(frames, fps);
     return write_sequence(dir, size, frames, fps, [&](int i, SE3* T_w_c) -> const SyntheticFrame& {
       *T_w_c = scene.camera_at(i / fps);
       return rendered[static_cast<size_t>(i)];
     });
   }
+  const double last_row = scene.camera.height_px - 1;
   SyntheticFrame f;
   return write_sequence(
       dir, size, frames, fps,
       [&](int i, SE3* T_w_c) -> const SyntheticFrame& {
-        *T_w_c = scene.camera_at(i / fps);
-        f = scene.render(*T_w_c);
-        f.depth = scene.render(scene.camera_at(i / fps + depth_late_s)).depth;
+        const double t = i / fps;
+        *T_w_c = scene.camera_at(t);
+        f = scene.render_rows(
+            [&](int y) { return scene.camera_at(t + (y / last_row - 0.5) * readout_s); });
+        f.depth = scene.render(scene.camera_at(t + depth_late_s)).depth;
         return f;
       },
       depth_late_s);

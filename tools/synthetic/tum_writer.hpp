@@ -30,9 +30,11 @@ bool write_sequence(const std::string& dir, const SensorImageSize& size, int fra
                     const std::function<const SyntheticFrame&(int, SE3*)>& frame,
                     double depth_late_s = 0.0);
 // Renders `frames` frames of the scene's path at `fps` into a TUM folder (write_sequence), each
-// depth image from where the camera was depth_late_s after its colour image.
+// depth image from where the camera was depth_late_s after its colour image. With a rolling
+// shutter (readout_s > 0) the colour image's rows are exposed top to bottom over readout_s,
+// its middle row at the image's stamp (where the ground truth is).
 bool write_synthetic_sequence(const std::string& dir, const SyntheticScene& scene, int frames,
-                              double fps, double depth_late_s = 0.0);
+                              double fps, double depth_late_s = 0.0, double readout_s = 0.0);
 // Parameters matching the scene's camera and its exact sensor, whose disparity noise is the
 // matcher's own 0.1 px, not the effective 0.4 px that covers a real Kinect's registration and
 // timing errors.
