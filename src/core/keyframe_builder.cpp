@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <cstring>
 
+#include "rgbdtam/core/rolling_shutter.hpp"
 #include "rgbdtam/core/tracker.hpp"
 
 namespace rgbdtam {
@@ -111,6 +112,7 @@ void KeyframeBuilder::build(const FramePyramid& frame, uint32_t id, int64_t time
   kf->timestamp_ns = timestamp_ns;
   kf->T_w_k = T_w_k;
   kf->T_k_kd = frame.T_c_d();
+  kf->row_motion = frame.row_motion();
   kf->active_photometric = 0;
   prepare(frame);
   for (int l = 0; l < kPyramidLevels; ++l) {
@@ -185,7 +187,11 @@ void KeyframeBuilder::select_photometric(const FramePyramid& frame, const FrameP
   int64_t index = 0;
   const Pinhole pinhole = k.pinhole();
   const float fx = pinhole.fx, fy = pinhole.fy;
+  // A rolling shutter: each row's point moved into the middle row's camera; its Jacobian stays
+  // the row's (the difference is second order).
+  const RowMotion rows(frame.row_motion(), h);
   for (int y = kBorderPx; y < h - kBorderPx; ++y) {
+    const float s = rows.from_middle(static_cast<float>(y));
     for (int x = kBorderPx; x < w - kBorderPx; ++x) {
       if (!candidate(x, y)) continue;
       if (!keep_candidate(index++, count, cap)) continue;
@@ -198,6 +204,7 @@ void KeyframeBuilder::select_photometric(const FramePyramid& frame, const FrameP
       // r = I_cur(warp) - I_kf: the keyframe-side (inverse-compositional) Jacobian is -grad I_kf.
       const float a[3] = {-gx * fx * iz, -gy * fy * iz, (gx * fx * p.x + gy * fy * p.y) * iz * iz};
       fill_jacobian(a, p.x, p.y, p.z, p.J);
+      rows.move(s, &p.x, &p.y, &p.z);
       if (!out->push_back(p)) return;
     }
   }
@@ -253,7 +260,9 @@ void KeyframeBuilder::select_geometric(const FramePyramid& frame, int level, Tra
   const Pinhole pinhole = k.pinhole();
   const float fx = pinhole.fx, fy = pinhole.fy;
   const bool inverse = opt_.residuals.geometric == GeometricMode::kInverseDepth;
+  const RowMotion rows(frame.depth_row_motion(), h);  // as the photometric points'
   for (int y = start; y < h - kBorderPx; y += step) {
+    const float s = rows.from_middle(static_cast<float>(y));
     for (int x = start; x < w - kBorderPx; x += step) {
       if (!candidate(x, y)) continue;
       if (!keep_candidate(index++, count, cap)) continue;
@@ -278,6 +287,7 @@ void KeyframeBuilder::select_geometric(const FramePyramid& frame, int level, Tra
         a[2] = slope - 1.0f;
       }
       fill_jacobian(a, p.x, p.y, p.z, p.J);
+      rows.move(s, &p.x, &p.y, &p.z);
       if (!out->push_back(p)) return;
     }
   }

@@ -7,6 +7,7 @@
 
 #include "rgbdtam/core/kth_smallest.hpp"
 #include "rgbdtam/core/lanes.hpp"
+#include "rgbdtam/core/rolling_shutter.hpp"
 #include "rgbdtam/core/symmetric_eigen.hpp"
 #include "rgbdtam/core/tracker.hpp"
 
@@ -48,18 +49,22 @@ struct Projector {
 // Where points x, y, z project: u (kInvalid where a point is behind the camera or outside
 // [1, u_max] x [1, v_max]), 1/z, the offset of the pixel at the top left of (u, v) in an image
 // `stride_px` wide and (u, v)'s fractions beyond it, the bilinear weights; for a point out of
-// view, those of the nearest pixel in view.
-void project_points(const Projector& P, const float* __restrict X, const float* __restrict Y,
-                    const float* __restrict Z, int n, float u_max, float v_max, float stride_px,
-                    float* __restrict u, float* __restrict inverse_z, int32_t* __restrict offset,
-                    float* __restrict fraction_u, float* __restrict fraction_v) {
+// view, those of the nearest pixel in view. kRolling: each point seen from the camera of the
+// row it projects to (that row found from the middle row's projection: one step).
+template <bool kRolling>
+void project_points(const Projector& P, const RowMotion& rows, const float* __restrict X,
+                    const float* __restrict Y, const float* __restrict Z, int n, float u_max,
+                    float v_max, float stride_px, float* __restrict u, float* __restrict inverse_z,
+                    int32_t* __restrict offset, float* __restrict fraction_u,
+                    float* __restrict fraction_v) {
   const float r0 = P.r[0], r1 = P.r[1], r2 = P.r[2], r3 = P.r[3], r4 = P.r[4], r5 = P.r[5];
   const float r6 = P.r[6], r7 = P.r[7], r8 = P.r[8], t0 = P.t[0], t1 = P.t[1], t2 = P.t[2];
   const float fx = P.pinhole.fx, fy = P.pinhole.fy, cx = P.pinhole.cx, cy = P.pinhole.cy;
   for (int i = 0; i < n; ++i) {
-    const float qx = r0 * X[i] + r1 * Y[i] + r2 * Z[i] + t0;
-    const float qy = r3 * X[i] + r4 * Y[i] + r5 * Z[i] + t1;
-    const float qz = r6 * X[i] + r7 * Y[i] + r8 * Z[i] + t2;
+    float qx = r0 * X[i] + r1 * Y[i] + r2 * Z[i] + t0;
+    float qy = r3 * X[i] + r4 * Y[i] + r5 * Z[i] + t1;
+    float qz = r6 * X[i] + r7 * Y[i] + r8 * Z[i] + t2;
+    if constexpr (kRolling) rows.move(-rows.from_middle(fy * qy / qz + cy), &qx, &qy, &qz);
     const float iz = 1.f / qz;
     const float ui = fx * qx * iz + cx;  // Pinhole::project_inverse_depth
     const float vi = fy * qy * iz + cy;
@@ -237,14 +242,16 @@ void Tracker::allocate(const Keyframe& model, const TrackerOptions& opt) {
 }
 
 void Tracker::project(const TrackPoints& pts, const PinholeIntrinsics& k, int width_px,
-                      int height_px, const SE3& T_c_k) {
+                      int height_px, const SE3& T_c_k, const Vector6d& row_motion) {
   const Projector P(T_c_k, k);
+  const RowMotion rows(row_motion, height_px);
   // In view with the 1-px margin that bilinear sampling needs (Image::contains).
   const float u_max = static_cast<float>(width_px - 1) - 1.f;
   const float v_max = static_cast<float>(height_px - 1) - 1.f;
-  project_points(P, pts.x(), pts.y(), pts.z(), pts.padded_size(), u_max, v_max,
-                 static_cast<float>(width_px), proj_u_.get(), proj_inverse_z_.get(),
-                 proj_offset_.get(), proj_fraction_u_.get(), proj_fraction_v_.get());
+  auto project_all = row_motion.isZero() ? project_points<false> : project_points<true>;
+  project_all(P, rows, pts.x(), pts.y(), pts.z(), pts.padded_size(), u_max, v_max,
+              static_cast<float>(width_px), proj_u_.get(), proj_inverse_z_.get(),
+              proj_offset_.get(), proj_fraction_u_.get(), proj_fraction_v_.get());
   const int n = pts.padded_size();
   // The padding is never in view (its offsets, clamped, are in the image like any other).
   for (int i = pts.size(); i < n; ++i) proj_u_[i] = kInvalid;
@@ -402,7 +409,7 @@ Tracker::LevelCost Tracker::evaluate_level(const Keyframe& kf, const FramePyrami
   const TrackPoints& geo = geometric_points(kf, frame, level);
   const PinholeIntrinsics& k = frame.intrinsics(level);
   const ImageF& img = frame.gray(level);
-  project(ph, k, img.width(), img.height(), T_c_k);
+  project(ph, k, img.width(), img.height(), T_c_k, frame.row_motion());
   sample_photometric(ph, img);
   estimate_gain_brightness(ph);
   const float* ref = ph.ref();
@@ -412,7 +419,8 @@ Tracker::LevelCost Tracker::evaluate_level(const Keyframe& kf, const FramePyrami
   }
   // From the keyframe's depth camera to the frame's: each depth image as taken. The keyframe-side
   // Jacobians stay those of T_c_k, off by the adjoint of a few milliseconds' motion.
-  project(geo, k, img.width(), img.height(), frame.T_c_d().inverse() * T_c_k * kf.T_k_kd);
+  project(geo, k, img.width(), img.height(), frame.T_c_d().inverse() * T_c_k * kf.T_k_kd,
+          frame.depth_row_motion());
   sample_geometric(geo, frame.inverse_depth(level));
   if (new_scale) update_scales(level, ph.size(), geo.size());
   return measure(ph, geo);

@@ -48,6 +48,8 @@ void KeyframeBuildTask::step(const KeyframeOrder& order) {
   frame_.build_gray();
   frame_.build_inverse_depth_levels();
   frame_.set_T_c_d(order.T_c_d);
+  frame_.set_row_motion(order.row_motion);
+  frame_.set_depth_row_motion(order.depth_row_motion);
   if (order.with_local_maps) fill_sensor_blind_pixels(order.T_w_k);
   builder_.build(frame_, order.id, order.timestamp_ns, order.T_w_k, &keyframe_,
                  order.with_local_maps ? &propagated_ : nullptr);

@@ -207,6 +207,7 @@ void MappingModule::finalize(Job* job) {
   }
   fused_.build_inverse_depth_levels();
   Keyframe* kf = job->keyframe;
+  fused_.set_row_motion(kf->row_motion);
   builder_.build_photometric(fused_, job->edges, kf->inactive_photometric());
   kf->map_points.clear();
   const Pinhole pinhole = fused_.intrinsics(0).pinhole();

@@ -58,6 +58,10 @@ const KeySpec kParamSpecs[] = {
      RGBDTAM_FIELD(distortion.p2), false},
     {"camera.k3", ValueType::kReal, -10, 10, "", "radial distortion k3",
      RGBDTAM_FIELD(distortion.k3), false},
+    {"camera.readout_ms", ValueType::kMillisecondsAsNs, -100, 100, "ms",
+     "a rolling shutter's time from the colour image's first row to its last, its middle row at "
+     "its stamp (0: a global shutter; negative: the last row first)",
+     RGBDTAM_FIELD(sensor.colour_readout_ns), false},
     {"depth_camera.fx", ValueType::kReal, 0, 1e5, "px", "depth camera focal length x",
      RGBDTAM_FIELD(depth_camera.intrinsics.fx_px), false},
     {"depth_camera.fy", ValueType::kReal, 0, 1e5, "px", "depth camera focal length y",
@@ -114,6 +118,9 @@ const KeySpec kParamSpecs[] = {
      "track each depth image from where the camera was when it was taken (its stamp less the "
      "offset; the motion model's velocity)",
      RGBDTAM_FIELD(sensor.depth_at_its_instant), false},
+    {"depth.readout_ms", ValueType::kMillisecondsAsNs, -100, 100, "ms",
+     "the same for the depth image's rows, its middle row at the depth's instant",
+     RGBDTAM_FIELD(sensor.depth_readout_ns), false},
     {"tracker.residuals", ValueType::kCustom, 0, 0, "",
      "PS, PD, GIDS, GIDD, GIDD*, PS+GIDD, PS+GDD, ...", RGBDTAM_FIELD(tracker.residuals), false,
      parse_residuals, print_residuals},

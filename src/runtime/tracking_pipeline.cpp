@@ -20,6 +20,13 @@ SE3 depth_camera(const SensorFrame& frame, const SensorModel& sensor, const Moti
   return motion.motion_over(1e-9 * static_cast<double>(dt_ns));
 }
 
+// A rolling shutter's motion over each image's rows, at the current velocity.
+void set_row_motions(const SensorModel& sensor, const MotionState& motion, FramePyramid* frame) {
+  frame->set_row_motion(motion.twist_over(1e-9 * static_cast<double>(sensor.colour_readout_ns)));
+  frame->set_depth_row_motion(
+      motion.twist_over(1e-9 * static_cast<double>(sensor.depth_readout_ns)));
+}
+
 // Keyframes ranked by what they see of a frame, most first; of equals, the later added.
 struct RankedKeyframes {
   Keyframe* keyframe[kMaxReuseCandidates];
@@ -124,6 +131,7 @@ uint32_t TrackingPipeline::prepare(const SensorFrame& frame, PoseEstimate* out) 
   FramePyramid& pyramid = frames_.current();
   undistorter_.undistort_gray(frame.gray, &pyramid.gray(0));
   pyramid.set_T_c_d(depth_camera(frame, params_.sensor, motion_));
+  set_row_motions(params_.sensor, motion_, &pyramid);
   pyramid.build_gray();
   // A structured-light sensor measures surfaces: real frames have 95-98 % of their valid
   // depth on one (fr1_xyz, fr3_teddy), uniform noise 10 %. Depth that is mostly not a surface
@@ -269,6 +277,8 @@ void TrackingPipeline::accept(const Attempt& a, const SensorFrame& frame, PoseEs
   ++counters_.tracked;
   search_.learn_scales(r);
   motion_.track(out->T_w_c, frame.timestamp_ns, continuous);
+  // A keyframe made of this frame takes its rolling shutter from the motion just measured.
+  set_row_motions(params_.sensor, motion_, &frames_.current());
   // The paper's keyframe criterion (overlap) and the authors' (camera motion). As in the
   // authors' code, motion alone ends a keyframe only once its map is made: cut earlier, a far
   // scene loses the baseline its multi-view depth needs (synthetic wall at 6 m: 2-5 % depth

@@ -21,6 +21,15 @@ inline void expect_close(const SE3& estimate, const SE3& truth, double metres, d
   EXPECT_LT(so3_log(d.quaternion()).norm(), radians);
 }
 
+// How far an estimate is from the truth.
+struct PoseError {
+  double m = 0.0, rad = 0.0;
+};
+inline PoseError pose_error(const SE3& estimate, const SE3& truth) {
+  const SE3 d = truth.inverse() * estimate;
+  return {d.translation().norm(), so3_log(d.quaternion()).norm()};
+}
+
 // The value a fraction q of the values lie below (the nearest rank below; q in [0, 1]).
 inline double percentile(std::vector<double> values, double q) {
   const size_t i = static_cast<size_t>(q * static_cast<double>(values.size() - 1));

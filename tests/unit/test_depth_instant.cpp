@@ -17,14 +17,10 @@ namespace rgbdtam {
 namespace {
 
 using testing::kDeg;
+using testing::PoseError;
 
 // 15 ms of a brisk hand-held motion (0.7 m/s, 40 deg/s): where the depth camera was.
 const SE3 kT_c_d(so3_exp(Vector3d(0.4, -0.3, 0.3) * kDeg), Vector3d(0.008, -0.004, 0.006));
-
-// A tracked pose's error against the truth.
-struct PoseError {
-  double m = 0.0, rad = 0.0;
-};
 
 // Tracked from where the depth was taken, the pose is the colour image's; read as if taken with
 // its colour, it is not (or the test would show nothing).
@@ -62,9 +58,7 @@ class DepthInstant : public ::testing::Test {
 
   PoseError track_error(const FramePyramid& frame, const SE3& T_k_c) {
     tracker_.allocate(kf_, p_.tracker);
-    const TrackResult r = tracker_.track(kf_, frame, SE3(), scales_);
-    const SE3 error = T_k_c.inverse() * r.T_k_c;
-    return {error.translation().norm(), so3_log(error.quaternion()).norm()};
+    return testing::pose_error(tracker_.track(kf_, frame, SE3(), scales_).T_k_c, T_k_c);
   }
 
   const testing::SyntheticScene room_ = testing::SyntheticScene::half_resolution();

@@ -41,6 +41,14 @@ class FramePyramid {
   // apart on average in fr1 after pairing) sees the depth from a camera that has moved on.
   void set_T_c_d(const SE3& T_c_d) { T_c_d_ = T_c_d; }
   const SE3& T_c_d() const { return T_c_d_; }
+  // A rolling shutter: the camera's motion (twist) from the colour image's first row to its
+  // last; row y was exposed from T_c_row(y) = exp((y / (h - 1) - 1/2) * row_motion), the
+  // middle row at the image's pose. Zero for a global shutter or an unknown motion.
+  void set_row_motion(const Vector6d& twist) { row_motion_ = twist; }
+  const Vector6d& row_motion() const { return row_motion_; }
+  // The same for the depth image's rows, from its middle row's camera (T_c_d).
+  void set_depth_row_motion(const Vector6d& twist) { depth_row_motion_ = twist; }
+  const Vector6d& depth_row_motion() const { return depth_row_motion_; }
 
  private:
   PinholeIntrinsics k_[kPyramidLevels];
@@ -49,6 +57,8 @@ class FramePyramid {
   std::unique_ptr<float[]> inverse_of_raw_;  // 65536 entries, 0 outside the valid range
   bool has_depth_ = false;
   SE3 T_c_d_;
+  Vector6d row_motion_ = Vector6d::Zero();
+  Vector6d depth_row_motion_ = Vector6d::Zero();
 };
 
 // Inverse depth changing by more than this fraction of itself per pixel is an occluding edge

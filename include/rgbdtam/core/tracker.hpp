@@ -67,6 +67,7 @@ struct Keyframe {
   int64_t timestamp_ns = 0;
   SE3 T_w_k;
   SE3 T_k_kd;  // its frame's depth camera (FramePyramid::T_c_d): the geometric points' frame
+  Vector6d row_motion = Vector6d::Zero();  // its frame's rolling shutter (FramePyramid)
   TrackPoints photometric_sets[2][kPyramidLevels];
   TrackPoints geometric[kPyramidLevels];  // sensor depth only
   int active_photometric = 0;
@@ -85,6 +86,7 @@ struct Keyframe {
     timestamp_ns = from.timestamp_ns;
     T_w_k = from.T_w_k;
     T_k_kd = from.T_k_kd;
+    row_motion = from.row_motion;
     aliases = from.aliases;
     active_photometric = 0;
   }
@@ -251,9 +253,10 @@ class Tracker {
   void motion_stats(const Keyframe& kf, const FramePyramid& frame, const SE3& T_c_k,
                     double* visible, double* parallax);
   // Projects every point at the level: u, v and 1/z into proj_*; u = kOutside where the point
-  // is behind the camera or out of the image's bilinear range.
+  // is behind the camera or out of the image's bilinear range. row_motion: the frame's rolling
+  // shutter (FramePyramid::row_motion), zero for none.
   void project(const TrackPoints& pts, const PinholeIntrinsics& k, int width_px, int height_px,
-               const SE3& T_c_k);
+               const SE3& T_c_k, const Vector6d& row_motion);
   void sample_photometric(const TrackPoints& pts, const ImageF& img);
   void sample_geometric(const TrackPoints& pts, const ImageF& inv_depth);
   void gather(const ImageF& img, int n);  // corners_ at proj_offset_

@@ -27,6 +27,8 @@ struct SensorModel {
   int64_t max_rgb_depth_dt_ns = 20'000'000;  // pair colour and depth within 20 ms
   int64_t depth_time_offset_ns = 0;  // pair colour at t with the depth stamped nearest t + offset
   bool depth_at_its_instant = true;  // the depth's own instant: its stamp less the offset
+  int64_t colour_readout_ns = 0;     // a rolling shutter's first to last row (0: all at once)
+  int64_t depth_readout_ns = 0;      // the same for the depth image's rows
   // The paper's eq. for structured light: sigma_rho = sigma_d / (f b), constant in 1/m.
   double inverse_depth_sigma() const { return disparity_sigma_px / (depth_focal_px * baseline_m); }
   // The standard deviation of a uniform quantisation step, in inverse depth.

@@ -53,6 +53,10 @@ class MotionState {
   SE3 extrapolate(double dt_s) const { return T_w_last_ * SE3::exp(velocity_ * dt_s); }
   // The camera's motion over dt_s at the current velocity (none without one).
   SE3 motion_over(double dt_s) const { return has_velocity_ ? SE3::exp(velocity_ * dt_s) : SE3(); }
+  // The same as a twist: the motion over one rolling shutter's readout.
+  Vector6d twist_over(double dt_s) const {
+    return has_velocity_ ? Vector6d(velocity_ * dt_s) : Vector6d::Zero();
+  }
   SE3 predict(int64_t t_ns) const { return extrapolate(seconds_since_last(t_ns)); }
   // The motion from the last valid pose to T_w_c at t_ns, for the health checks' physical
   // limits (dt 0 without an earlier pose).
