@@ -409,7 +409,7 @@ Tracker::LevelCost Tracker::evaluate_level(const Keyframe& kf, const FramePyrami
   const TrackPoints& geo = geometric_points(kf, frame, level);
   const PinholeIntrinsics& k = frame.intrinsics(level);
   const ImageF& img = frame.gray(level);
-  project(ph, k, img.width(), img.height(), T_c_k, frame.row_motion());
+  project(ph, k, img.width(), img.height(), T_c_k, rows_.colour);
   sample_photometric(ph, img);
   estimate_gain_brightness(ph);
   const float* ref = ph.ref();
@@ -420,7 +420,7 @@ Tracker::LevelCost Tracker::evaluate_level(const Keyframe& kf, const FramePyrami
   // From the keyframe's depth camera to the frame's: each depth image as taken. The keyframe-side
   // Jacobians stay those of T_c_k, off by the adjoint of a few milliseconds' motion.
   project(geo, k, img.width(), img.height(), frame.T_c_d().inverse() * T_c_k * kf.T_k_kd,
-          frame.depth_row_motion());
+          rows_.depth);
   sample_geometric(geo, frame.inverse_depth(level));
   if (new_scale) update_scales(level, ph.size(), geo.size());
   return measure(ph, geo);
@@ -500,6 +500,7 @@ Tracker::LevelCost Tracker::optimize_levels(const Keyframe& kf, const FramePyram
   brightness_ = 0.f;
   LevelCost cost;
   for (int level = kPyramidLevels - 1; level >= finest_level; --level) {
+    rows_ = frame.row_motions_at(kf.T_w_k * T_c_k->inverse());
     cost = optimize_level(kf, frame, level, T_c_k, true, opt_.max_iterations[level],
                           &result->iterations);
     result->level_sigma[level] = ph_sigma_;
@@ -526,6 +527,7 @@ TrackResult Tracker::track_best(const Keyframe& kf, const FramePyramid& frame,
   int iterations = 0;
   for (int i = 0; i < count; ++i) {
     SE3 T_c_k = T_k_c_guesses[i].inverse();
+    rows_ = frame.row_motions_at(kf.T_w_k * T_k_c_guesses[i]);
     gain_ = 1.f;
     brightness_ = 0.f;
     // Refined as tracking does, each term scaled by its own residuals so that a misaligned
@@ -558,6 +560,7 @@ void Tracker::profile(const Keyframe& kf, const FramePyramid& frame, const SE3& 
                       const ReferenceScales& reference, uint8_t terms, double* mean_cost,
                       double* valid_fraction) {
   terms_ = terms;
+  rows_ = frame.fixed_row_motions();  // every pose compared on the same rows
   for (int i = 0; i < n; ++i) {
     if (reference.photometric[level] > 0.f) ph_sigma_ = reference.photometric[level];
     geo_scale_ = 1.f;
@@ -575,6 +578,7 @@ void Tracker::fit_on_common_points(const Keyframe& kf, const FramePyramid& frame
                                    const SE3& T_k_b, int level, const ReferenceScales& reference,
                                    uint8_t terms, double* cost_a, double* cost_b) {
   terms_ = terms;
+  rows_ = frame.fixed_row_motions();  // both poses compared on the same rows
   const TrackPoints* sets[2] = {&photometric_points(kf, level),
                                 &geometric_points(kf, frame, level)};
   const double weights[2] = {1.0, opt_.geometric_weight};

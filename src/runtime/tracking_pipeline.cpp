@@ -27,6 +27,20 @@ void set_row_motions(const SensorModel& sensor, const MotionState& motion, Frame
       motion.twist_over(1e-9 * static_cast<double>(sensor.depth_readout_ns)));
 }
 
+// While the frame is tracked on from the frame just before it, itself tracked on from its own (a
+// velocity measured), each pyramid level places the rows by the motion from that frame's pose to
+// the level's starting pose (Tracker). Across a lost frame the constant velocity is not known to
+// hold, and after a restart or a relocalisation the last pose may be the wrong one: on rendered
+// global-shutter scenes given a readout, rows following either let wrong poses out as valid.
+void set_rows_follow_pose(const SensorModel& sensor, const MotionState& motion, int64_t t_ns,
+                          FramePyramid* frame) {
+  if (!motion.has_velocity() || !motion.previous_valid() || !motion.continuous_to(t_ns)) return;
+  const double dt_s = motion.seconds_since_last(t_ns);
+  frame->set_rows_follow_pose({motion.T_w_last().inverse(),
+                               1e-9 * static_cast<double>(sensor.colour_readout_ns) / dt_s,
+                               1e-9 * static_cast<double>(sensor.depth_readout_ns) / dt_s});
+}
+
 // Keyframes ranked by what they see of a frame, most first; of equals, the later added.
 struct RankedKeyframes {
   Keyframe* keyframe[kMaxReuseCandidates];
@@ -90,7 +104,12 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
     if (sensor_failed != 0) {
       on_lost(frame, sensor_failed, &out);  // the sensor, not the scene: nothing to search
     } else {
+      set_rows_follow_pose(params_.sensor, motion_, frame.timestamp_ns, &frames_.current());
       const Attempt a = estimate(frame.timestamp_ns);
+      // From here on the rows are fixed: the pose found set them (accept), and a pose against
+      // another part of the map (a keyframe reused, a relocalisation) differs from the last
+      // frame's by that part's drift or a jump, not by the camera's motion.
+      frames_.current().set_rows_fixed();
       // A frame lost because the scene repeats or leaves a direction free is no better found
       // by its appearance: the loss ends in a restart, not a relocalisation.
       const bool look_alike_scene = (a.failed & (kAmbiguous | kWeakDirection)) != 0;

@@ -128,7 +128,9 @@ TEST(RobustTracking, ARollingShuttersRowsAreTrackedFromTheirOwnInstants) {
       1e3 * row_by_row.worst_translation_m, row_by_row.worst_rotation_rad * 180 / M_PI);
   EXPECT_EQ(row_by_row.valid, kFrames);
   EXPECT_LT(row_by_row.worst_translation_m, 0.5 * as_if_global.worst_translation_m);
-  EXPECT_LT(row_by_row.worst_rotation_rad, 0.5 * as_if_global.worst_rotation_rad);
+  // The pan accelerates: rows placed by the velocity a frame before leave a quarter of the
+  // turn's error (0.58 deg), rows placed by the pose being tracked a tenth (PoseRowMotion).
+  EXPECT_LT(row_by_row.worst_rotation_rad, 0.15 * as_if_global.worst_rotation_rad);
 }
 
 TEST(RobustTracking, AFastPanIsTrackedOrLostNeverWrong) {

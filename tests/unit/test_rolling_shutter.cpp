@@ -1,6 +1,7 @@
 // A rolling shutter (camera.readout_ms, depth.readout_ms): each row of an image was exposed from
 // where the camera was at that row's instant (FramePyramid::row_motion), in the frame and in
-// the keyframe, and the pose is the middle row's. Rendered room, half size, each row rendered
+// the keyframe, and the pose is the middle row's; while tracking, the motion the pose reached
+// implies (PoseRowMotion). Rendered room, half size, each row rendered
 // from its own pose.
 #include <gtest/gtest.h>
 
@@ -68,6 +69,38 @@ TEST_F(RollingShutter, TheKeyframesRowsAreTrackedFromTheirOwnInstants) {
   own.set_depth_row_motion(Vector6d::Zero());
   builder_.build(own, 0, 0, SE3(), &kf_);
   expect_tracked_row_by_row("the keyframe's", track_error(frame, T_k_c_), row_by_row);
+}
+
+// The camera sped up: the velocity a frame earlier, which places the rows before the frame is
+// tracked, was half what moved it over this frame. The pose each level starts from implies a
+// motion from the last frame, the true pose the true one.
+TEST_F(RollingShutter, TheFramesRowsFollowThePoseBeingTracked) {
+  FramePyramid own;
+  testing::synthetic_pyramid(room_.render(SE3()), p_, &own);
+  builder_.build(own, 0, 0, SE3(), &kf_);
+  const double readout_over_frame = 0.6;  // 20 ms of a 33 ms frame
+  const SE3 T_w_last = T_k_c_ * SE3::exp(pan_over_readout() / readout_over_frame).inverse();
+  FramePyramid frame;
+  render_rolling(T_k_c_, pan_over_readout(), &frame);
+  frame.set_row_motion(0.5 * pan_over_readout());
+  frame.set_depth_row_motion(0.5 * pan_over_readout());
+  const PoseError a_frame_late = track_error(frame, T_k_c_);
+  frame.set_rows_follow_pose({T_w_last.inverse(), readout_over_frame, readout_over_frame});
+  const PoseError following = track_error(frame, T_k_c_);
+  testing::expect_timing_modelled("with the rows placed by the velocity a frame before",
+                                  a_frame_late, "by the pose being tracked", following);
+  frame.set_rows_fixed();
+  EXPECT_EQ(frame.row_motions_at(T_k_c_).colour, 0.5 * pan_over_readout())
+      << "fixed again: the twists set";
+}
+
+TEST(PoseRowMotion, IsTheMotionFromTheLastFrameOverEachReadout) {
+  const SE3 T_w_last(so3_exp(Vector3d(0.1, 0.2, 0.3)), Vector3d(1.0, 2.0, 3.0));
+  const PoseRowMotion m{T_w_last.inverse(), 0.6, 0.3};
+  const RowMotions rows = m.at(T_w_last * SE3::exp(pan_over_readout()));
+  EXPECT_LT((rows.colour - 0.6 * pan_over_readout()).norm(), 1e-12);
+  EXPECT_LT((rows.depth - 0.3 * pan_over_readout()).norm(), 1e-12);
+  EXPECT_EQ(m.at(T_w_last).colour, Vector6d::Zero()) << "a camera that stayed put";
 }
 
 TEST(RowMotion, MovesAPointToItsRowsCameraAndBackToFirstOrder) {

@@ -3,6 +3,7 @@
 // each coarser level halves both sizes by 2x2 averaging (640x480 -> 80x60 over 4 levels).
 
 #include "rgbdtam/core/camera.hpp"
+#include "rgbdtam/core/rolling_shutter.hpp"
 #include "rgbdtam/core/se3.hpp"
 
 namespace rgbdtam {
@@ -44,11 +45,24 @@ class FramePyramid {
   // A rolling shutter: the camera's motion (twist) from the colour image's first row to its
   // last; row y was exposed from T_c_row(y) = exp((y / (h - 1) - 1/2) * row_motion), the
   // middle row at the image's pose. Zero for a global shutter or an unknown motion.
-  void set_row_motion(const Vector6d& twist) { row_motion_ = twist; }
-  const Vector6d& row_motion() const { return row_motion_; }
+  void set_row_motion(const Vector6d& twist) { rows_.colour = twist; }
+  const Vector6d& row_motion() const { return rows_.colour; }
   // The same for the depth image's rows, from its middle row's camera (T_c_d).
-  void set_depth_row_motion(const Vector6d& twist) { depth_row_motion_ = twist; }
-  const Vector6d& depth_row_motion() const { return depth_row_motion_; }
+  void set_depth_row_motion(const Vector6d& twist) { rows_.depth = twist; }
+  const Vector6d& depth_row_motion() const { return rows_.depth; }
+  // While the frame is tracked on from the last frame, the pose each pyramid level starts from
+  // implies the rows' motions (PoseRowMotion, Tracker) in place of the two above, until
+  // set_rows_fixed().
+  void set_rows_follow_pose(const PoseRowMotion& m) {
+    pose_rows_ = m;
+    rows_follow_pose_ = true;
+  }
+  void set_rows_fixed() { rows_follow_pose_ = false; }
+  // The rows' motions of the frame at T_w_c.
+  RowMotions row_motions_at(const SE3& T_w_c) const {
+    return rows_follow_pose_ ? pose_rows_.at(T_w_c) : rows_;
+  }
+  const RowMotions& fixed_row_motions() const { return rows_; }  // the two above
 
  private:
   PinholeIntrinsics k_[kPyramidLevels];
@@ -57,8 +71,9 @@ class FramePyramid {
   std::unique_ptr<float[]> inverse_of_raw_;  // 65536 entries, 0 outside the valid range
   bool has_depth_ = false;
   SE3 T_c_d_;
-  Vector6d row_motion_ = Vector6d::Zero();
-  Vector6d depth_row_motion_ = Vector6d::Zero();
+  RowMotions rows_;
+  PoseRowMotion pose_rows_;
+  bool rows_follow_pose_ = false;
 };
 
 // Inverse depth changing by more than this fraction of itself per pixel is an occluding edge

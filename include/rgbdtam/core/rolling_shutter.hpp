@@ -8,6 +8,27 @@
 
 namespace rgbdtam {
 
+// Each image's twist over its readout (FramePyramid::row_motion, depth_row_motion).
+struct RowMotions {
+  Vector6d colour = Vector6d::Zero();
+  Vector6d depth = Vector6d::Zero();
+};
+
+// The rows' motion a pose implies: the camera moved on from the last frame's at a constant
+// velocity, so over a readout it moved by the motion between the two poses times the readout
+// over the time between them. Tracking places the rows by the motion of the pose it has reached,
+// where a velocity measured a frame earlier lags behind an accelerating camera.
+struct PoseRowMotion {
+  SE3 T_last_w;                // the last frame's camera, from the world
+  double colour_fraction = 0;  // the colour image's readout over the time since that frame
+  double depth_fraction = 0;   // ... the depth image's
+
+  RowMotions at(const SE3& T_w_c) const {
+    const Vector6d motion = (T_last_w * T_w_c).log();
+    return {motion * colour_fraction, motion * depth_fraction};
+  }
+};
+
 struct RowMotion {
   float v[3], w[3];  // the twist over one readout: translation (m) and rotation (rad)
   float inverse_last_row;

@@ -288,6 +288,10 @@ class Tracker {
   float gain_ = 1.f, brightness_ = 0.f, ph_sigma_ = 0.05f;
   float geo_scale_ = 1.f;      // geometric spread in sensor-model standard deviations
   uint8_t terms_ = kAllTerms;  // of the current track
+  // The frame's rows' motions the evaluations use: while optimising, those the pose each level
+  // starts from implies (FramePyramid::row_motions_at), fixed within the level; the fixed ones
+  // when poses are compared.
+  RowMotions rows_;
 };
 
 }  // namespace rgbdtam

@@ -38,12 +38,16 @@ void MotionState::begin(const SE3& T_w_c, int64_t t_ns) {
   lost_since_ns_ = -1;  // a later loss restarts from this pose, not sooner
 }
 
-void MotionState::track(const SE3& T_w_c, int64_t t_ns, bool continuous) {
+bool MotionState::continuous_to(int64_t t_ns) const {
   const int64_t gap = t_ns - last_ns_;
+  return motion_model_ && has_last_ && gap > 0 && gap <= kMaxVelocityGapNs;
+}
+
+void MotionState::track(const SE3& T_w_c, int64_t t_ns, bool continuous) {
   velocity_.setZero();
-  has_velocity_ = motion_model_ && continuous && has_last_ && gap > 0 && gap <= kMaxVelocityGapNs;
+  has_velocity_ = continuous && continuous_to(t_ns);
   if (has_velocity_) {
-    velocity_ = (T_w_last_.inverse() * T_w_c).log() / (static_cast<double>(gap) * 1e-9);
+    velocity_ = (T_w_last_.inverse() * T_w_c).log() / seconds_since_last(t_ns);
   }
   T_w_last_ = T_w_c;
   last_ns_ = t_ns;

@@ -58,6 +58,9 @@ class MotionState {
     return has_velocity_ ? Vector6d(velocity_ * dt_s) : Vector6d::Zero();
   }
   SE3 predict(int64_t t_ns) const { return extrapolate(seconds_since_last(t_ns)); }
+  // A frame at t_ns tracked on from the last valid pose gives a velocity (has_velocity() after
+  // track(), continuous): the two are close enough in time for the camera's motion between them.
+  bool continuous_to(int64_t t_ns) const;
   // The motion from the last valid pose to T_w_c at t_ns, for the health checks' physical
   // limits (dt 0 without an earlier pose).
   HealthContext context(const SE3& T_w_c, int64_t t_ns, double typical_sigma) const;
