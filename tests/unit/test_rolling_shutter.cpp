@@ -100,7 +100,8 @@ TEST(PoseRowMotion, IsTheMotionFromTheLastFrameOverEachReadout) {
   const RowMotions rows = m.at(T_w_last * SE3::exp(pan_over_readout()));
   EXPECT_LT((rows.colour - 0.6 * pan_over_readout()).norm(), 1e-12);
   EXPECT_LT((rows.depth - 0.3 * pan_over_readout()).norm(), 1e-12);
-  EXPECT_EQ(m.at(T_w_last).colour, Vector6d::Zero()) << "a camera that stayed put";
+  // To rounding: an aarch64 build fuses the products (3e-17 there).
+  EXPECT_LT(m.at(T_w_last).colour.norm(), 1e-12) << "a camera that stayed put";
 }
 
 TEST(RowMotion, MovesAPointToItsRowsCameraAndBackToFirstOrder) {
