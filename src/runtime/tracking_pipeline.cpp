@@ -432,6 +432,8 @@ bool TrackingPipeline::relocalise(const SensorFrame& frame, PoseEstimate* out) {
     out->T_w_c = T_w_c;
     out->flags |= kPoseValid;
     motion_.begin(T_w_c, frame.timestamp_ns);
+    // The keyframe's rows as the motion state knows it: no velocity across the loss.
+    set_row_motions(params_.sensor, motion_, &frames_.current());
     ++counters_.tracked;
   }
   out->flags |= kRelocalised | kReset;
@@ -469,6 +471,8 @@ void TrackingPipeline::on_lost(const SensorFrame& frame, uint32_t failed, PoseEs
     keyframes_.forget_fallback();
     keyframes_.restarted();
     motion_.restart(frame.timestamp_ns);
+    // The keyframe's rows as if still: the velocity from before the loss is half a second old.
+    set_row_motions(params_.sensor, motion_, &frames_.current());
     frames_.forget_last_valid();
     out->flags |= kReset;
   }
