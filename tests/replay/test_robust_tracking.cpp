@@ -122,12 +122,12 @@ TEST(RobustTracking, AKeyframeMadeAtARestartIsPlacedAsIfStill) {
   KeyframeBuildTask building;
   TrackingPipeline pipeline;
   ASSERT_TRUE(pipeline.init(params, &keyframes, &building).is_ok());
-  auto rows_of = [&](uint32_t id) {
+  auto rows_of = [&](uint32_t id) -> Vector6d {
     for (int k = 0; k < keyframes.size(); ++k) {
       if (keyframes.at(k).id == id) return keyframes.at(k).row_motion;
     }
     ADD_FAILURE() << "keyframe " << id << " not in the pool";
-    return Vector6d();
+    return Vector6d::Zero();
   };
   double moving_rows = 0.0;  // the largest of a keyframe made while tracking
   int restarts = 0;
