@@ -112,7 +112,7 @@ void KeyframeBuilder::build(const FramePyramid& frame, uint32_t id, int64_t time
   kf->timestamp_ns = timestamp_ns;
   kf->T_w_k = T_w_k;
   kf->T_k_kd = frame.T_c_d();
-  kf->row_motion = frame.row_motion();
+  kf->row_motion = frame.fixed_row_motions().colour;
   kf->active_photometric = 0;
   prepare(frame);
   for (int l = 0; l < kPyramidLevels; ++l) {
@@ -189,7 +189,7 @@ void KeyframeBuilder::select_photometric(const FramePyramid& frame, const FrameP
   const float fx = pinhole.fx, fy = pinhole.fy;
   // A rolling shutter: each row's point moved into the middle row's camera; its Jacobian stays
   // the row's (the difference is second order).
-  const RowMotion rows(frame.row_motion(), h);
+  const RowMotion rows(frame.fixed_row_motions().colour, h);
   for (int y = kBorderPx; y < h - kBorderPx; ++y) {
     const float s = rows.from_middle(static_cast<float>(y));
     for (int x = kBorderPx; x < w - kBorderPx; ++x) {
@@ -260,7 +260,7 @@ void KeyframeBuilder::select_geometric(const FramePyramid& frame, int level, Tra
   const Pinhole pinhole = k.pinhole();
   const float fx = pinhole.fx, fy = pinhole.fy;
   const bool inverse = opt_.residuals.geometric == GeometricMode::kInverseDepth;
-  const RowMotion rows(frame.depth_row_motion(), h);  // as the photometric points'
+  const RowMotion rows(frame.fixed_row_motions().depth, h);  // as the photometric points'
   for (int y = start; y < h - kBorderPx; y += step) {
     const float s = rows.from_middle(static_cast<float>(y));
     for (int x = start; x < w - kBorderPx; x += step) {

@@ -46,10 +46,8 @@ class FramePyramid {
   // last; row y was exposed from T_c_row(y) = exp((y / (h - 1) - 1/2) * row_motion), the
   // middle row at the image's pose. Zero for a global shutter or an unknown motion.
   void set_row_motion(const Vector6d& twist) { rows_.colour = twist; }
-  const Vector6d& row_motion() const { return rows_.colour; }
   // The same for the depth image's rows, from its middle row's camera (T_c_d).
   void set_depth_row_motion(const Vector6d& twist) { rows_.depth = twist; }
-  const Vector6d& depth_row_motion() const { return rows_.depth; }
   // While the frame is tracked on from the last frame, the pose each pyramid level starts from
   // implies the rows' motions (PoseRowMotion, Tracker) in place of the two above, until
   // set_rows_fixed().
@@ -62,7 +60,7 @@ class FramePyramid {
   RowMotions row_motions_at(const SE3& T_w_c) const {
     return rows_follow_pose_ ? pose_rows_.at(T_w_c) : rows_;
   }
-  const RowMotions& fixed_row_motions() const { return rows_; }  // the two above
+  const RowMotions& fixed_row_motions() const { return rows_; }  // as set above
 
  private:
   PinholeIntrinsics k_[kPyramidLevels];

@@ -8,7 +8,7 @@
 
 namespace rgbdtam {
 
-// Each image's twist over its readout (FramePyramid::row_motion, depth_row_motion).
+// Each image's twist over its readout (FramePyramid::fixed_row_motions).
 struct RowMotions {
   Vector6d colour = Vector6d::Zero();
   Vector6d depth = Vector6d::Zero();

@@ -254,7 +254,7 @@ class Tracker {
                     double* visible, double* parallax);
   // Projects every point at the level: u, v and 1/z into proj_*; u = kOutside where the point
   // is behind the camera or out of the image's bilinear range. row_motion: the frame's rolling
-  // shutter (FramePyramid::row_motion), zero for none.
+  // shutter (FramePyramid::set_row_motion), zero for none.
   void project(const TrackPoints& pts, const PinholeIntrinsics& k, int width_px, int height_px,
                const SE3& T_c_k, const Vector6d& row_motion);
   void sample_photometric(const TrackPoints& pts, const ImageF& img);

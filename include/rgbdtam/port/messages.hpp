@@ -172,7 +172,7 @@ struct KeyframeOrder {
   int64_t timestamp_ns = 0;
   SE3 T_w_k;
   SE3 T_c_d;                                     // the frame's depth camera (FramePyramid::T_c_d)
-  Vector6d row_motion = Vector6d::Zero();        // its rolling shutter (FramePyramid::row_motion)
+  Vector6d row_motion = Vector6d::Zero();        // its rolling shutter (FramePyramid)
   Vector6d depth_row_motion = Vector6d::Zero();  // ... and its depth image's
   bool with_local_maps = false;  // the local maps fill the pixels the sensor did not measure
 };

@@ -111,8 +111,8 @@ void KeyframeHandover::order_pending(const FrameBuffers& frames, uint32_t map_ep
   order.timestamp_ns = pending_.pose.timestamp_ns;
   order.T_w_k = pending_.T_w_k;
   order.T_c_d = f.T_c_d();
-  order.row_motion = f.row_motion();
-  order.depth_row_motion = f.depth_row_motion();
+  order.row_motion = f.fixed_row_motions().colour;
+  order.depth_row_motion = f.fixed_row_motions().depth;
   order.with_local_maps = with_local_maps;
   // With nothing to track against yet (the first keyframe, or the first in a loaded map), the
   // tracker has nothing else to do: it is built at once.
