@@ -128,7 +128,7 @@ PoseEstimate TrackingPipeline::process(const SensorFrame& frame) {
 
 void TrackingPipeline::build_pending_keyframe() {
   if (!keyframes_.due()) return;
-  keyframes_.order_pending(frames_, motion_.map_epoch());
+  keyframes_.order_pending(frames_, motion_.map_frame());
   adopt_built_keyframe();  // built already when synchronous or at once
 }
 
@@ -207,7 +207,7 @@ void TrackingPipeline::start(const SensorFrame& frame, PoseEstimate* out) {
 }
 
 void TrackingPipeline::adopt_built_keyframe() {
-  const Keyframe* kf = keyframes_.adopt_built(motion_.map_epoch());
+  const Keyframe* kf = keyframes_.adopt_built(motion_.map_frame());
   if (kf == nullptr) return;
   loop_.offer_keyframe(*kf, keyframes_.adopted_link(), keyframes_.adopted_window_links(),
                        keyframes_.adopted_frame());
@@ -454,7 +454,7 @@ void TrackingPipeline::find_in_loaded_map(const SensorFrame& frame, PoseEstimate
   localising_ = false;
   out->reset_counter = motion_.reset_counter();
   if (!keyframes_.due())
-    keyframes_.offer_to_mapper(*out, motion_.map_epoch(), frames_.current(), nullptr);
+    keyframes_.offer_to_mapper(*out, motion_.map_frame(), frames_.current(), nullptr);
   frames_.keep_current();
   motion_.end_frame(true);
 }
@@ -491,7 +491,7 @@ void TrackingPipeline::report(int64_t t_ns, PoseEstimate* out) {
   }
   // A keyframe's frame goes to the mapper with the keyframe, once built.
   if (valid && !keyframes_.due())
-    keyframes_.offer_to_mapper(*out, motion_.map_epoch(), frames_.current(), nullptr);
+    keyframes_.offer_to_mapper(*out, motion_.map_frame(), frames_.current(), nullptr);
   if (valid && motion_.withheld(t_ns)) {
     out->flags = (out->flags & ~kPoseValid) | kSettling;
     ++counters_.withheld;

@@ -23,16 +23,17 @@ struct Handover {
     testing::synthetic_pyramid(room.render(room.camera_at(t_s)), p, &frames.current());
     frames.keep_current();
   }
-  // A keyframe of the room seen at t_s, built and adopted as the reference.
-  Keyframe* new_keyframe(double t_s) {
+  // A keyframe of the room seen at t_s, ordered in the world of `ordered` and adopted in that of
+  // `adopted`, as the reference (null: it was stale).
+  Keyframe* new_keyframe(double t_s, const MapFrame& ordered = MapFrame(),
+                         const MapFrame& adopted = MapFrame()) {
     testing::synthetic_pyramid(room.render(room.camera_at(t_s)), p, &frames.current());
     PoseEstimate out;
     EXPECT_TRUE(handover.ask(room.camera_at(t_s), handover.restart_link(), false,
                              frames.current_slot(), &out));
-    handover.order_pending(frames, 0);
-    Keyframe* kf = handover.adopt_built(0);
-    EXPECT_NE(kf, nullptr);
-    handover.release_adopted();
+    handover.order_pending(frames, ordered);
+    Keyframe* kf = handover.adopt_built(adopted);
+    if (kf != nullptr) handover.release_adopted();
     return kf;
   }
   testing::SyntheticScene room;
@@ -66,6 +67,35 @@ TEST(KeyframeHandover, TheKeyframeReuseLeftIsOfferedUntilTheReferenceChanges) {
   EXPECT_EQ(h.handover.left(), third);
   h.handover.restarted();
   EXPECT_EQ(h.handover.left(), nullptr) << "a restart leaves the estimate's frame";
+}
+
+// A loop correction while a keyframe is built moves the world its pose was measured in: the
+// keyframe is adopted, moved with it, so that the frames tracked meanwhile are not lost with it.
+// A restart or relocalisation meanwhile (a new epoch) leaves its pose nowhere: it is dropped.
+TEST(KeyframeHandover, AKeyframeBuiltAcrossACorrectionMovesWithTheMap) {
+  Handover h(8);
+  (void)h.new_keyframe(0.0);
+  MapFrame ordered;
+  ordered.corrections = 2;
+  ordered.T_now_epoch = SE3(so3_exp(Vector3d(0, 0.01, 0)), Vector3d(0.01, 0, 0));
+  const SE3 step(so3_exp(Vector3d(0.002, 0, 0)), Vector3d(0, 0.004, -0.003));
+  MapFrame corrected = ordered;
+  corrected.corrections = 3;
+  corrected.T_now_epoch = step * ordered.T_now_epoch;
+  Keyframe* moved = h.new_keyframe(0.5, ordered, corrected);
+  ASSERT_NE(moved, nullptr);
+  const SE3 expected = step * h.room.camera_at(0.5);
+  EXPECT_LT((moved->T_w_k.translation() - expected.translation()).norm(), 1e-9);
+  EXPECT_LT(so3_log((moved->T_w_k.inverse() * expected).quaternion()).norm(), 1e-9);
+  EXPECT_EQ(h.handover.counters().keyframes_stale, 0u);
+
+  MapFrame restarted = corrected;
+  ++restarted.epoch;
+  restarted.corrections = 0;
+  restarted.T_now_epoch = SE3();
+  EXPECT_EQ(h.new_keyframe(1.0, corrected, restarted), nullptr);
+  EXPECT_EQ(h.handover.counters().keyframes_stale, 1u);
+  EXPECT_EQ(h.handover.reference(), moved);
 }
 
 TEST(KeyframeHandover, AKeyframeLeftWhoseSlotWasRecycledIsNotOffered) {

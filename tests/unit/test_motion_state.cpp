@@ -82,5 +82,31 @@ TEST(MotionState, ALargeCorrectionWithholdsTheConsumersWindowAndABlendedOneNothi
   EXPECT_EQ(m.counters().blended_corrections, 1u);
 }
 
+// Loop corrections, blended or not, move the camera's world by what they measured: a pose from
+// before them maps into it. A restart or a relocalisation begins a new epoch, which nothing maps.
+TEST(MotionState, TheMapFrameComposesCorrectionsWithinAnEpoch) {
+  MotionState m = tracked_until(990 * kMs);
+  const MapFrame before = m.map_frame();
+  const SE3 first(so3_exp(Vector3d(0.0, 0.02, 0.0)), Vector3d(0.0, 0.01, 0.0));
+  const SE3 second(so3_exp(Vector3d(0.01, 0.0, 0.0)), Vector3d(0.03, 0.0, -0.02));
+  m.correct_blended(first);
+  m.correct(second, second, 0.05, 2.5 * M_PI / 180.0);
+  EXPECT_FALSE(m.map_frame().same_as(before));
+  SE3 T_now_before;
+  ASSERT_TRUE(m.map_frame().moved_from(before, &T_now_before));
+  const SE3 expected = second * first;
+  EXPECT_LT((T_now_before.translation() - expected.translation()).norm(), 1e-12);
+  EXPECT_LT(so3_log((T_now_before.inverse() * expected).quaternion()).norm(), 1e-12);
+
+  const MapFrame corrected = m.map_frame();
+  m.jumped(m.last_ns());
+  EXPECT_FALSE(m.map_frame().moved_from(corrected, &T_now_before)) << "a relocalisation";
+  const MapFrame relocalised = m.map_frame();
+  m.restart(m.last_ns() + 600 * kMs);
+  EXPECT_FALSE(m.map_frame().moved_from(relocalised, &T_now_before)) << "a restart";
+  EXPECT_TRUE(m.map_frame().moved_from(m.map_frame(), &T_now_before));
+  EXPECT_LT(T_now_before.translation().norm(), 1e-12);
+}
+
 }  // namespace
 }  // namespace rgbdtam

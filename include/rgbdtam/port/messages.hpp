@@ -154,10 +154,27 @@ struct KeyframeHandle {
   uint32_t generation = 0;
 };
 
+// Which frame the camera's world is in. A restart or a relocalisation moves it by a motion
+// nothing measured (a new epoch); a loop correction by a known one, T_now_epoch's step.
+struct MapFrame {
+  uint32_t epoch = 0;
+  uint32_t corrections = 0;  // in this epoch
+  SE3 T_now_epoch;           // the world now from the world the epoch began in
+  // How poses of an earlier frame map into this one: false across epochs.
+  bool moved_from(const MapFrame& earlier, SE3* T_now_earlier) const {
+    if (earlier.epoch != epoch) return false;
+    *T_now_earlier = T_now_epoch * earlier.T_now_epoch.inverse();
+    return true;
+  }
+  bool same_as(const MapFrame& other) const {
+    return other.epoch == epoch && other.corrections == corrections;
+  }
+};
+
 // Tracker -> mapper, one per tracked frame. The slot owns its images.
 struct MapperFrame {
   uint32_t sequence = 0;
-  uint32_t map_epoch = 0;  // a change means the map moved: the poses before it are in another frame
+  MapFrame map_frame;  // the frame T_w_c is in
   int64_t timestamp_ns = 0;
   SE3 T_w_c;
   KeyframeHandle new_keyframe;  // set when this frame became a keyframe (pinned for the mapper)

@@ -101,7 +101,7 @@ class MappingModule {
   EarlierFrame earlier_[kEarlierFrames];
   int earlier_count_ = 0;  // valid entries; the newest is earlier_[(earlier_next_ + 3) % 4]
   int earlier_next_ = 0;
-  uint32_t map_epoch_ = 0;
+  MapFrame map_frame_;         // the world of the open keyframes' and earlier frames' poses
   float scene_depth_m_ = 1.f;  // the newest keyframe's median depth, to space earlier frames
   KeyframeBuilder builder_;
   FramePyramid fused_;  // the finishing keyframe's grey pyramid and fused inverse depth

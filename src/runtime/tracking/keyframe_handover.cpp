@@ -88,7 +88,7 @@ bool KeyframeHandover::ask(const SE3& T_w_k, const KeyframeLink& link, bool to_m
   return true;
 }
 
-void KeyframeHandover::order_pending(const FrameBuffers& frames, uint32_t map_epoch) {
+void KeyframeHandover::order_pending(const FrameBuffers& frames, const MapFrame& map) {
   if (!pending_.due) return;
   pending_.due = false;
   const FramePyramid& f = frames.slot(pending_.frame_buffer);
@@ -105,7 +105,7 @@ void KeyframeHandover::order_pending(const FrameBuffers& frames, uint32_t map_ep
     m.points.clear();
     for (const MapPoint& p : local_maps_[i].points) (void)m.points.push_back(p);
   }
-  pending_.map_epoch = map_epoch;
+  pending_.map = map;
   KeyframeOrder order;
   order.id = next_keyframe_id_++;
   order.timestamp_ns = pending_.pose.timestamp_ns;
@@ -119,16 +119,21 @@ void KeyframeHandover::order_pending(const FrameBuffers& frames, uint32_t map_ep
   building_->submit(order, reference_ == nullptr);
 }
 
-Keyframe* KeyframeHandover::adopt_built(uint32_t map_epoch) {
+Keyframe* KeyframeHandover::adopt_built(const MapFrame& map) {
   if (!building_->built()) return nullptr;
-  if (pending_.map_epoch != map_epoch) {
-    // Its pose is from before the map moved (a restart, relocalisation or loop correction).
+  SE3 T_now_then;
+  if (!map.moved_from(pending_.map, &T_now_then)) {
+    // Its pose is from before the camera's world jumped (a restart or relocalisation).
     ++counters_.keyframes_stale;
     building_->release();
     return nullptr;
   }
   Keyframe* kf = pool_->acquire(reference_);
   building_->hand_over(kf);
+  // A loop correction meanwhile moved the world its pose was measured in, and its reference.
+  kf->T_w_k = T_now_then * kf->T_w_k;
+  pending_.pose.T_w_c = T_now_then * pending_.pose.T_w_c;
+  pending_.map = map;
   reference_ = kf;
   fallback_ = nullptr;
   ++counters_.keyframes;
@@ -145,7 +150,7 @@ WindowLinks KeyframeHandover::adopted_window_links() const {
 
 void KeyframeHandover::release_adopted() {
   if (pending_.to_mapper) {
-    offer_to_mapper(pending_.pose, pending_.map_epoch, building_->frame(), &building_->edges());
+    offer_to_mapper(pending_.pose, pending_.map, building_->frame(), &building_->edges());
   }
   building_->release();
 }
@@ -163,7 +168,7 @@ void KeyframeHandover::adopt_all_maps() {
   for (int i = 0; i < pool_->size(); ++i) adopt_map(&pool_->at(i));
 }
 
-void KeyframeHandover::offer_to_mapper(const PoseEstimate& pose, uint32_t map_epoch,
+void KeyframeHandover::offer_to_mapper(const PoseEstimate& pose, const MapFrame& map,
                                        const FramePyramid& f, const ImageU8* keyframe_edges) {
   if (mapper_queue_ == nullptr) return;
   const bool new_keyframe = keyframe_edges != nullptr;
@@ -174,7 +179,7 @@ void KeyframeHandover::offer_to_mapper(const PoseEstimate& pose, uint32_t map_ep
     return;
   }
   slot->sequence = pose.sequence;
-  slot->map_epoch = map_epoch;
+  slot->map_frame = map;
   slot->timestamp_ns = pose.timestamp_ns;
   slot->T_w_c = pose.T_w_c;
   std::memcpy(slot->gray.data(), f.gray(0).data(), sizeof(float) * slot->gray.size());

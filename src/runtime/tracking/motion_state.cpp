@@ -62,8 +62,19 @@ int64_t MotionState::lost_for_ns(int64_t t_ns) {
   return t_ns - lost_since_ns_;
 }
 
+void MotionState::new_epoch() {
+  ++map_frame_.epoch;
+  map_frame_.corrections = 0;
+  map_frame_.T_now_epoch = SE3();
+}
+
+void MotionState::moved(const SE3& delta) {
+  ++map_frame_.corrections;
+  map_frame_.T_now_epoch = delta * map_frame_.T_now_epoch;
+}
+
 void MotionState::restart(int64_t t_ns) {
-  ++map_epoch_;
+  new_epoch();
   lost_since_ns_ = -1;
   last_ns_ = t_ns;
   velocity_.setZero();
@@ -83,7 +94,7 @@ void MotionState::correct(const SE3& delta, const SE3& sent_jump, double max_rep
     withhold_until_ns_ = last_ns_ + reset_after_lost_ns_;
   }
   ++reset_counter_;
-  ++map_epoch_;
+  moved(delta);
   ++counters_.loop_corrections;
   correction_.flags |= kLoopCorrected | kReset;
   correction_.translation_m += jump_m;
@@ -91,7 +102,7 @@ void MotionState::correct(const SE3& delta, const SE3& sent_jump, double max_rep
 }
 
 void MotionState::correct_blended(const SE3& delta) {
-  ++map_epoch_;
+  moved(delta);
   T_w_last_ = delta * T_w_last_;
   ++counters_.loop_corrections;
   ++counters_.blended_corrections;
@@ -105,7 +116,7 @@ void MotionState::jumped(int64_t last_valid_ns) {
     withhold_until_ns_ = std::max(withhold_until_ns_, last_valid_ns + reset_after_lost_ns_);
   }
   ++reset_counter_;
-  ++map_epoch_;
+  new_epoch();
 }
 
 CorrectionJump MotionState::take_correction() {

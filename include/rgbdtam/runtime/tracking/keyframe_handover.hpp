@@ -20,8 +20,8 @@ namespace rgbdtam {
 struct HandoverCounters {
   uint32_t keyframes = 0;
   uint32_t frames_awaiting_keyframe = 0;  // tracked against the last one while the next was built
-  uint32_t keyframes_stale = 0;  // built after a reset or correction moved the map: not adopted
-  uint32_t reused = 0;           // keyframe switches that reused an earlier keyframe
+  uint32_t keyframes_stale = 0;           // built after a restart or relocalisation: not adopted
+  uint32_t reused = 0;                    // keyframe switches that reused an earlier keyframe
   uint32_t mapper_dropped_frames = 0;     // the mapper queue was full
   uint32_t mapper_dropped_keyframes = 0;  // ... on a new keyframe: it keeps its sensor map
 };
@@ -74,12 +74,12 @@ class KeyframeHandover {
   bool due() const { return pending_.due; }
   // The asking frame's pose, as tracking measured it: offered to the mapper with the keyframe.
   void set_due_pose(const PoseEstimate& pose) { pending_.pose = pose; }
-  // Orders the keyframe asked for, if one is due; map_epoch: the map's now (MotionState: a map
-  // moved before it is built makes it stale).
-  void order_pending(const FrameBuffers& frames, uint32_t map_epoch);
-  // Once built: the keyframe in its pool slot as the new reference (null when none is built,
-  // or it was stale). Its link and frame stay readable until release_adopted().
-  Keyframe* adopt_built(uint32_t map_epoch);
+  // Orders the keyframe asked for, if one is due; map: the camera's world now (MotionState).
+  void order_pending(const FrameBuffers& frames, const MapFrame& map);
+  // Once built: the keyframe in its pool slot as the new reference, moved with the map if a loop
+  // correction moved it meanwhile (null when none is built, or it was stale: the map began a new
+  // epoch). Its link and frame stay readable until release_adopted().
+  Keyframe* adopt_built(const MapFrame& map);
   const KeyframeLink& adopted_link() const { return pending_.link; }
   // The local window's measurements of the adopted keyframe: the tracker's, then the builder's.
   WindowLinks adopted_window_links() const;
@@ -93,9 +93,9 @@ class KeyframeHandover {
   // sensor-blind pixels must be the newest, and the mapper may finish a keyframe after the
   // tracker has moved on from it.
   void adopt_all_maps();
-  // A valid frame for the mapper, its pose on the map of map_epoch (keyframe_edges: it is the new
+  // A valid frame for the mapper, its pose in the world of map (keyframe_edges: it is the new
   // reference, with these edges).
-  void offer_to_mapper(const PoseEstimate& pose, uint32_t map_epoch, const FramePyramid& f,
+  void offer_to_mapper(const PoseEstimate& pose, const MapFrame& map, const FramePyramid& f,
                        const ImageU8* keyframe_edges);
 
   // Moves each keyframe the correction knows to its corrected pose, and newer ones with the
@@ -127,8 +127,8 @@ class KeyframeHandover {
     KeyframeLink link;
     KeyframeLink window;
     bool to_mapper = false;
-    PoseEstimate pose;       // the frame's, offered to the mapper with the keyframe
-    uint32_t map_epoch = 0;  // when ordered: the map moved since makes it stale
+    PoseEstimate pose;  // the frame's, offered to the mapper with the keyframe
+    MapFrame map;       // when ordered
   };
 
   KeyframePool* pool_ = nullptr;

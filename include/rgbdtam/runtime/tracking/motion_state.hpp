@@ -11,6 +11,7 @@
 
 #include "rgbdtam/core/se3.hpp"
 #include "rgbdtam/core/tracking_health.hpp"
+#include "rgbdtam/port/messages.hpp"
 
 namespace rgbdtam {
 
@@ -43,9 +44,9 @@ class MotionState {
   // the camera's acceleration.
   bool has_velocity() const { return has_velocity_; }
   uint32_t reset_counter() const { return reset_counter_; }
-  // Steps whenever the camera's world moved (a restart, a relocalisation, any loop correction,
-  // blended or not): what was measured before is in another frame.
-  uint32_t map_epoch() const { return map_epoch_; }
+  // The camera's world: a restart or relocalisation begins an epoch, any loop correction
+  // (blended or not) moves it by a known motion.
+  const MapFrame& map_frame() const { return map_frame_; }
   double seconds_since_last(int64_t t_ns) const {
     return static_cast<double>(t_ns - last_ns_) * 1e-9;
   }
@@ -99,6 +100,9 @@ class MotionState {
   const MotionCounters& counters() const { return counters_; }
 
  private:
+  void new_epoch();
+  void moved(const SE3& delta);  // by a loop correction, T_w'_w
+
   bool motion_model_ = true;
   int64_t reset_after_lost_ns_ = 0;
   SE3 T_w_last_;
@@ -109,7 +113,7 @@ class MotionState {
   bool previous_valid_ = false;
   int64_t lost_since_ns_ = -1;  // the first lost frame of the current loss; -1 when tracking
   uint32_t reset_counter_ = 0;
-  uint32_t map_epoch_ = 0;
+  MapFrame map_frame_;
   CorrectionJump correction_;
   int64_t withhold_until_ns_ = 0;
   MotionCounters counters_;
