@@ -268,6 +268,11 @@ NeesResult evaluate_frame_to_frame_nees(const std::vector<StampedPose>& gt,
                                         double max_gap_s, const IntegrityLimits& limits) {
   NeesResult out;
   const double max_gt_gap = max_gt_gap_s(stamps_of(gt));
+  // A slower camera's consecutive frames are further apart: at 7.5 Hz every pair would be
+  // skipped, and no pose checked.
+  std::vector<double> intervals;
+  for (size_t i = 1; i < est.size(); ++i) intervals.push_back(est[i].stamp_s - est[i - 1].stamp_s);
+  max_gap_s = std::max(max_gap_s, 1.5 * median_of(intervals));
   std::vector<double> nees;
   double sum_t = 0, sum_r = 0;
   for (size_t i = 1; i < est.size() && i < covariance.size(); ++i) {

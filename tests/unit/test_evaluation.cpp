@@ -228,6 +228,27 @@ TEST(Nees, APoseWrongBeyondItsCovarianceByMoreThanACentimetreIsMisleading) {
   EXPECT_LT(r.worst_excess_m, 0.05);
 }
 
+// A 7.5 Hz camera's consecutive frames are 133 ms apart: they are still compared (a pose 5 cm
+// off is misleading there too), while a lost stretch between two estimates is still skipped.
+TEST(Nees, ASlowCamerasConsecutiveFramesAreCheckedAndALostStretchIsNot) {
+  std::vector<StampedPose> gt, est;
+  std::vector<Eigen::Matrix<double, 6, 6>> cov;
+  const Eigen::Matrix<double, 6, 6> tight = 1e-6 * Eigen::Matrix<double, 6, 6>::Identity();
+  for (int i = 0; i < 40; ++i) {
+    const double t = i / 7.5;
+    const SE3 truth(so3_exp(Vector3d(0, 0.1 * t, 0)), Vector3d(0.2 * t, 0, 0));
+    gt.push_back({t, truth});
+    if (i >= 20 && i < 24) continue;  // lost
+    const double off = i == 10 ? 0.05 : 0.0;
+    est.push_back({t, truth * SE3(Eigen::Quaterniond::Identity(), Vector3d(off, 0, 0))});
+    cov.push_back(tight);
+  }
+  const NeesResult r = evaluate_frame_to_frame_nees(gt, est, cov);
+  EXPECT_EQ(r.pairs, static_cast<int>(est.size()) - 2) << "every pair but the one across the loss";
+  ASSERT_EQ(r.misleading, 2);
+  EXPECT_NEAR(r.misleading_stamps_s[0], 10 / 7.5, 1e-9);
+}
+
 }  // namespace
 }  // namespace rgbdtam
 

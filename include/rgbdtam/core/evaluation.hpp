@@ -71,7 +71,8 @@ FalseValidResult evaluate_false_valid(const std::vector<StampedPose>& gt,
 bool interpolate_pose(const std::vector<StampedPose>& gt, double t, double max_gap_s, SE3* out);
 
 // The normalised estimation error squared (NEES) of frame-to-frame motion, ours: for each
-// pair of consecutive estimates at most max_gap_s apart, e = log(D_gt^-1 D_est) with
+// pair of consecutive estimates at most max_gap_s apart (or 1.5 times their median interval,
+// for a camera slower than 15 Hz), e = log(D_gt^-1 D_est) with
 // D = P_{i-1}^-1 P_i, (translation, rotation) in camera i, against the covariance
 // C_{i-1} + C_i of the two poses' reported covariances (same order, camera frame). Ground truth
 // is interpolated at the estimates' stamps. A consistent covariance averages 6.
