@@ -76,7 +76,7 @@ for row in "${rows[@]}"; do
   field() { printf '%s' "$json" | sed -E "s/.*\"$1\": \"?([^,\"}]*)\"?.*/\1/"; }
   printf '| %-18s | %6s | %7.2f | %7.1f%% | %5s of %3s | %10s | %9s | %5s | %7s | %6s | %4s (+%s) | %8.2f | %6.2f |\n' \
     "$name" "$(field frames)" "$(field ate_rmse_cm)" "$(awk "BEGIN{print 100*$(field coverage)}")" \
-    "$(field false_valid)" "$(field false_valid_checked)" "$(field misleading)" "$(awk "BEGIN{v=\"$(field nees_mean)\"; if (v+0 == v) printf \"%.2f\", v; else print \"-\"}")" \
+    "$(field false_valid)" "$(field false_valid_checked)" "$(field misleading)" "$(awk "BEGIN{v=\"$(field nees_mean)\"; if (v ~ /^[0-9.eE+-]+\$/) printf \"%.2f\", v; else print \"-\"}")" \
     "$(field lost)" "$(field retried)" "$(field resets)" \
     "$(field keyframes)" "$(field reused)" "$(field track_median_ms)" "$(field track_p95_ms)"
 done
