@@ -221,7 +221,7 @@ void print_key_values(const KeyTable& table, void* target, char* buf, int size,
         std::snprintf(value, sizeof(value), "%d", *static_cast<const int*>(f));
         break;
       case ValueType::kMillisecondsAsNs:
-        std::snprintf(value, sizeof(value), "%.6f",
+        std::snprintf(value, sizeof(value), "%.15g",
                       static_cast<double>(*static_cast<const int64_t*>(f)) * 1e-6);
         break;
       case ValueType::kReal:

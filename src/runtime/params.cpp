@@ -231,17 +231,21 @@ const KeySpec kParamSpecs[] = {
     {"loop.min_window_correction_angle", ValueType::kDegreesAsRadians, 0, 180, "deg",
      "... or beyond this angle", RGBDTAM_FIELD(loop.min_window_correction_rad), false},
     {"loop.max_reported_jump", ValueType::kReal, 0, 10, "m",
-     "a correction moving the camera further is sent at once, with the reset counter, and "
-     "withholds poses for health.reset_after_lost_ms",
+     "a correction sent at once (not blended) moving the camera further withholds poses for "
+     "health.reset_after_lost_ms",
      RGBDTAM_FIELD(loop.max_reported_jump_m), false},
     {"loop.max_reported_jump_angle", ValueType::kDegreesAsRadians, 0, 180, "deg",
      "... or turning it further", RGBDTAM_FIELD(loop.max_reported_jump_rad), false},
     {"loop.blend_rate", ValueType::kReal, 0, 10, "m/s",
-     "a correction within loop.max_reported_jump reaches the poses sent at most this fast, with "
-     "no jump and no reset (0: at once, with the reset counter)",
+     "a correction reaches the poses sent at most this fast, with no jump and no reset, when that "
+     "takes at most loop.blend_within_ms; else at once, with the reset counter (0: always at once)",
      RGBDTAM_FIELD(loop.blend_rate_m_per_s), false},
     {"loop.blend_rate_angle", ValueType::kDegreesAsRadians, 0, 1000, "deg/s",
      "... and turns them at most this fast", RGBDTAM_FIELD(loop.blend_rate_rad_per_s), false},
+    {"loop.blend_within_ms", ValueType::kMillisecondsAsNs, 0, 1e5, "ms",
+     "the longest a correction may take to reach the poses sent (ArduPilot ignores vision for 1 s "
+     "after a reset)",
+     RGBDTAM_FIELD(loop.blend_within_ns), false},
     {"loop.max_drift", ValueType::kReal, 0.001, 10, "",
      "a revisit moving the map further than this fraction of the distance travelled since the "
      "earlier place is a look-alike, not a loop: neither place is used again",

@@ -69,7 +69,7 @@ Status TrackingPipeline::init(const Params& params, KeyframePool* keyframes,
   frames_.allocate(params_.camera, params_.sensor.depth_factor, params_.sensor.depth_range);
   motion_.init(params_.tracker.motion_model, params_.reset_after_lost_ns);
   blend_.init({params_.loop.blend_rate_m_per_s, params_.loop.blend_rate_rad_per_s,
-               params_.loop.max_reported_jump_m, params_.loop.max_reported_jump_rad});
+               static_cast<double>(params_.loop.blend_within_ns) * 1e-9});
   keyframes_.init(params_, keyframes, building, clock);
   Keyframe model;
   keyframes_.allocate_model(&model);

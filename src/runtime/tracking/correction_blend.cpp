@@ -9,7 +9,7 @@ bool CorrectionBlend::absorb(const SE3& delta, const SE3& T_w_c, SE3* sent_jump)
   const SE3 last_sent = T_sent_w_ * T_w_c;
   const SE3 jump = last_sent.inverse() * (delta * T_w_c);
   if (limits_.rate_m_per_s > 0.0 && limits_.rate_rad_per_s > 0.0 &&
-      within(jump, limits_.max_m, limits_.max_rad)) {
+      within(jump, limits_.rate_m_per_s * limits_.max_s, limits_.rate_rad_per_s * limits_.max_s)) {
     T_sent_w_ = T_sent_w_ * delta.inverse();  // the pose sent does not move
     blending_ = true;
     return true;

@@ -4,7 +4,7 @@
 // no jump and no reset. A reset costs an ArduPilot consumer a second of vision data (its
 // AP_VisualOdom ignores the poses for 1 s after the counter changes); a jump sent valid is
 // motion to anyone who differences poses. A correction the poses sent cannot take up within
-// the limits is sent at once, with the reset counter (MotionState::correct).
+// the longest blend is sent at once, with the reset counter (MotionState::correct).
 // Thread: the tracker's.
 
 #include <cstdint>
@@ -16,8 +16,7 @@ namespace rgbdtam {
 struct BlendLimits {
   double rate_m_per_s = 0.0;  // 0: every correction is sent at once
   double rate_rad_per_s = 0.0;
-  double max_m = 0.0;  // the largest correction blended in, at the camera
-  double max_rad = 0.0;
+  double max_s = 0.0;  // the longest a blend may take: what the rates take up in it, at the camera
 };
 
 class CorrectionBlend {
