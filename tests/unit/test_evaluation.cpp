@@ -205,6 +205,13 @@ TEST(Nees, AveragesSixWhenTheCovarianceIsTrueAndScalesWithIt) {
   EXPECT_GT(consistent.p99, consistent.median);
 }
 
+// The camera walking along x at 0.2 m/s while turning at 0.1 rad/s, and an estimate of it
+// off_m along its own x.
+SE3 walking(double t) { return SE3(so3_exp(Vector3d(0, 0.1 * t, 0)), Vector3d(0.2 * t, 0, 0)); }
+SE3 shifted(const SE3& T, double off_m) {
+  return T * SE3(Eigen::Quaterniond::Identity(), Vector3d(off_m, 0, 0));
+}
+
 TEST(Nees, APoseWrongBeyondItsCovarianceByMoreThanACentimetreIsMisleading) {
   // Exact estimates at 30 Hz with a 1 mm covariance; one pose 5 cm off (its step in and out
   // of it both wrong), another 2 cm off but sent with a 3 cm covariance (honest), and one
@@ -214,10 +221,9 @@ TEST(Nees, APoseWrongBeyondItsCovarianceByMoreThanACentimetreIsMisleading) {
   const Eigen::Matrix<double, 6, 6> tight = 1e-6 * Eigen::Matrix<double, 6, 6>::Identity();
   for (int i = 0; i < 90; ++i) {
     const double t = i / 30.0;
-    const SE3 truth(so3_exp(Vector3d(0, 0.1 * t, 0)), Vector3d(0.2 * t, 0, 0));
-    gt.push_back({t, truth});
+    gt.push_back({t, walking(t)});
     const double off = i == 30 ? 0.05 : i == 60 ? 0.02 : i == 75 ? 0.01 : 0.0;
-    est.push_back({t, truth * SE3(Eigen::Quaterniond::Identity(), Vector3d(off, 0, 0))});
+    est.push_back({t, shifted(walking(t), off)});
     cov.push_back(i == 60 ? 9e-4 * Eigen::Matrix<double, 6, 6>::Identity() : tight);
   }
   const NeesResult r = evaluate_frame_to_frame_nees(gt, est, cov);
@@ -236,11 +242,9 @@ TEST(Nees, ASlowCamerasConsecutiveFramesAreCheckedAndALostStretchIsNot) {
   const Eigen::Matrix<double, 6, 6> tight = 1e-6 * Eigen::Matrix<double, 6, 6>::Identity();
   for (int i = 0; i < 40; ++i) {
     const double t = i / 7.5;
-    const SE3 truth(so3_exp(Vector3d(0, 0.1 * t, 0)), Vector3d(0.2 * t, 0, 0));
-    gt.push_back({t, truth});
+    gt.push_back({t, walking(t)});
     if (i >= 20 && i < 24) continue;  // lost
-    const double off = i == 10 ? 0.05 : 0.0;
-    est.push_back({t, truth * SE3(Eigen::Quaterniond::Identity(), Vector3d(off, 0, 0))});
+    est.push_back({t, shifted(walking(t), i == 10 ? 0.05 : 0.0)});
     cov.push_back(tight);
   }
   const NeesResult r = evaluate_frame_to_frame_nees(gt, est, cov);
